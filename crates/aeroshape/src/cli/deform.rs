@@ -1,0 +1,324 @@
+//! `aeroshape deform`: deform a volume grid from prescribed boundary motion (paper §4).
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use deform::{BoundaryConditions, DeformOptions, MarkerRole, RigidMotion, SolverKind, Stiffness};
+use serde::Serialize;
+
+/// Deform a volume mesh from prescribed boundary motion: rigid motion of markers (Eq. 34) or
+/// per-node displacements, with fixed and sliding markers (spring analogy with adaptation
+/// matrices R, Eqs. 14–26). Markers not named move nothing.
+#[derive(Debug, Args)]
+pub struct DeformArgs {
+    /// Input grid (.su2, .msh or .vtu).
+    pub mesh: PathBuf,
+    /// Output grid (.su2, .msh or .vtu, by extension); same connectivity, markers and node
+    /// numbering as the input.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Marker moved rigidly by --rotate-deg/--axis-point/--axis-dir/--translate (repeatable:
+    /// all named markers share the motion).
+    #[arg(long, value_name = "MARKER")]
+    pub rigid: Vec<String>,
+    /// Rotation angle in degrees, right-hand rule about --axis-dir (Eq. 34).
+    #[arg(
+        long,
+        value_name = "A",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub rotate_deg: f64,
+    /// A point of the rotation axis.
+    #[arg(long, value_name = "x,y,z", value_parser = parse_vec3, default_value = "0,0,0", allow_negative_numbers = true)]
+    pub axis_point: [f64; 3],
+    /// Direction of the rotation axis.
+    #[arg(long, value_name = "x,y,z", value_parser = parse_vec3, default_value = "0,0,1", allow_negative_numbers = true)]
+    pub axis_dir: [f64; 3],
+    /// Translation applied after the rotation.
+    #[arg(long, value_name = "dx,dy,dz", value_parser = parse_vec3, default_value = "0,0,0", allow_negative_numbers = true)]
+    pub translate: [f64; 3],
+    /// Per-node displacements: CSV with a header line, then `node,dx,dy,dz` (node index as in
+    /// the mesh file, 0-based).
+    #[arg(long, value_name = "FILE.csv")]
+    pub displacements: Option<PathBuf>,
+    /// Marker whose nodes slide on its plane (the marker must be planar; repeatable).
+    #[arg(long, value_name = "MARKER")]
+    pub slide: Vec<String>,
+    /// Marker held fixed (the default for markers not named; repeatable).
+    #[arg(long, value_name = "MARKER")]
+    pub fixed: Vec<String>,
+    /// Linear solver: `pcg` (conjugate gradients with multigrid), `jacobi` (the paper's
+    /// point iteration, Eq. 22), `pcg-jacobi` (conjugate gradients, Jacobi preconditioner).
+    #[arg(long, value_enum, default_value_t = SolverArg::Pcg)]
+    pub solver: SolverArg,
+    /// Spring stiffness K_ij.
+    #[arg(long, value_enum, default_value_t = StiffnessArg::InverseLength2)]
+    pub stiffness: StiffnessArg,
+    /// Disable the adaptation matrices R (plain spring analogy).
+    #[arg(long)]
+    pub no_rotation: bool,
+    /// Relative residual at which the linear solves stop.
+    #[arg(long, default_value_t = 1e-8)]
+    pub tolerance: f64,
+    /// Write a JSON report (counts, iterations, residual, time per phase, quality).
+    #[arg(long, value_name = "REPORT.json")]
+    pub report: Option<PathBuf>,
+    /// Write the grid even if cells are inverted after the incremental retries.
+    #[arg(long)]
+    pub allow_inverted: bool,
+}
+
+/// `--solver` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SolverArg {
+    /// Conjugate gradients with the multigrid preconditioner.
+    Pcg,
+    /// The paper's point iteration (Eq. 22).
+    Jacobi,
+    /// Conjugate gradients with the Jacobi preconditioner.
+    PcgJacobi,
+}
+
+/// `--stiffness` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StiffnessArg {
+    /// K = 1 / l.
+    InverseLength,
+    /// K = 1 / l².
+    InverseLength2,
+    /// K = (1 / l²)(mean cell volume / local cell volume).
+    Volume,
+}
+
+fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!("expected three comma-separated numbers, got {s:?}"));
+    }
+    let mut v = [0.0; 3];
+    for (k, p) in parts.iter().enumerate() {
+        v[k] = p
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("{p:?} is not a finite number"))?;
+    }
+    Ok(v)
+}
+
+/// Reads `node,dx,dy,dz` lines after a header.
+fn read_displacements(path: &Path, n_nodes: usize) -> anyhow::Result<Vec<(u32, [f64; 3])>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    let mut out = Vec::new();
+    let mut seen = std::collections::HashMap::new();
+    for (ln, line) in text.lines().enumerate().skip(1) {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let f: Vec<&str> = line.split(',').map(str::trim).collect();
+        let bad = |what: &str| anyhow::anyhow!("{}: line {}: {what}", path.display(), ln + 1);
+        if f.len() != 4 {
+            return Err(bad("expected node,dx,dy,dz"));
+        }
+        let node: usize = f[0]
+            .parse()
+            .map_err(|_| bad(&format!("bad node index {:?}", f[0])))?;
+        if node >= n_nodes {
+            return Err(bad(&format!(
+                "node {node} does not exist (the grid has {n_nodes} nodes)"
+            )));
+        }
+        let mut d = [0.0; 3];
+        for k in 0..3 {
+            d[k] = f[k + 1]
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| bad(&format!("bad displacement {:?}", f[k + 1])))?;
+        }
+        if let Some(prev) = seen.insert(node, ln + 1) {
+            return Err(bad(&format!("node {node} already given on line {prev}")));
+        }
+        out.push((node as u32, d));
+    }
+    Ok(out)
+}
+
+#[derive(Serialize)]
+struct Seconds {
+    read: f64,
+    setup: f64,
+    assemble: f64,
+    precond: f64,
+    rotation: f64,
+    solve: f64,
+    quality: f64,
+    write: f64,
+    total: f64,
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    input: String,
+    output: String,
+    nodes: usize,
+    cells: usize,
+    iterations: usize,
+    rotation_iterations: usize,
+    residual: f64,
+    increments: usize,
+    seconds: Seconds,
+    quality_before: deform::spring::QualitySummary,
+    quality_after: deform::spring::QualitySummary,
+    deform: &'a deform::DeformReport,
+}
+
+/// Runs the subcommand.
+pub fn run(args: DeformArgs) -> anyhow::Result<()> {
+    let t_all = Instant::now();
+    let format = mesh::io::Format::from_path(&args.output).ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: unknown output format (use .su2, .msh or .vtu)",
+            args.output.display()
+        )
+    })?;
+    let mut inputs: Vec<&Path> = vec![&args.mesh];
+    if let Some(d) = &args.displacements {
+        inputs.push(d);
+    }
+    if let Some(r) = &args.report {
+        inputs.push(r);
+    }
+    aeroshape_check(&args.output, &inputs)?;
+    if let Some(r) = &args.report {
+        aeroshape_check(r, &[&args.mesh])?;
+    }
+    if args.rigid.is_empty() && (args.rotate_deg != 0.0 || args.translate != [0.0; 3]) {
+        bail!("--rotate-deg/--translate need a marker to move: give --rigid MARKER");
+    }
+    let bar = progress_bar();
+    let t = Instant::now();
+    bar_msg(&bar, "reading");
+    let m = mesh::io::read_path(&args.mesh)?;
+    let read = t.elapsed().as_secs_f64();
+    let motion = RigidMotion {
+        angle_deg: args.rotate_deg,
+        axis_point: args.axis_point,
+        axis_dir: args.axis_dir,
+        translation: args.translate,
+    };
+    let mut markers: Vec<(String, MarkerRole)> = Vec::new();
+    for r in &args.rigid {
+        markers.push((r.clone(), MarkerRole::Rigid(motion)));
+    }
+    for s in &args.slide {
+        markers.push((s.clone(), MarkerRole::SlidePlane));
+    }
+    for f in &args.fixed {
+        markers.push((f.clone(), MarkerRole::Fixed));
+    }
+    let displacements = match &args.displacements {
+        Some(p) => read_displacements(p, m.n_nodes())?,
+        None => Vec::new(),
+    };
+    let bc = BoundaryConditions {
+        markers,
+        displacements,
+    };
+    let opts = DeformOptions {
+        solver: match args.solver {
+            SolverArg::Pcg => SolverKind::PcgMultigrid,
+            SolverArg::Jacobi => SolverKind::PointIteration,
+            SolverArg::PcgJacobi => SolverKind::PcgJacobi,
+        },
+        stiffness: match args.stiffness {
+            StiffnessArg::InverseLength => Stiffness::InverseLength,
+            StiffnessArg::InverseLength2 => Stiffness::InverseLengthSquared,
+            StiffnessArg::Volume => Stiffness::Volume,
+        },
+        adapt_rotation: !args.no_rotation,
+        rel_tol: args.tolerance,
+        max_iters: if args.solver == SolverArg::Jacobi {
+            200_000
+        } else {
+            20_000
+        },
+        allow_inverted: args.allow_inverted,
+        ..Default::default()
+    };
+    let d = deform::deform_with_progress(&m, &bc, &opts, &mut |phase, done, total| {
+        if let Some(b) = &bar {
+            b.set_message(format!("{phase} ({done}/{total} increments)"));
+        }
+    })
+    .with_context(|| format!("{}", args.mesh.display()))?;
+    for note in &d.report.notes {
+        eprintln!("note: {note}");
+    }
+    bar_msg(&bar, "writing");
+    let t = Instant::now();
+    let mut out = m;
+    out.coords = d.coords;
+    aeroshape::fsio::write_atomic(&args.output, |w| mesh::io::write(&out, format, w))?;
+    let write = t.elapsed().as_secs_f64();
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    if let Some(path) = &args.report {
+        let r = &d.report;
+        let s = r.seconds;
+        let rep = Report {
+            input: args.mesh.display().to_string(),
+            output: args.output.display().to_string(),
+            nodes: r.nodes,
+            cells: r.cells,
+            iterations: r.iterations,
+            rotation_iterations: r.rotation_iterations,
+            residual: r.residual,
+            increments: r.increments,
+            seconds: Seconds {
+                read,
+                setup: s.setup,
+                assemble: s.assemble,
+                precond: s.precond,
+                rotation: s.rotation,
+                solve: s.solve,
+                quality: s.quality,
+                write,
+                total: t_all.elapsed().as_secs_f64(),
+            },
+            quality_before: r.quality_before,
+            quality_after: r.quality_after,
+            deform: r,
+        };
+        aeroshape::fsio::write_atomic(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &rep).map_err(std::io::Error::other)?;
+            writeln!(w)
+        })?;
+    }
+    Ok(())
+}
+
+fn aeroshape_check(out: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
+    aeroshape::fsio::ensure_not_input(out, inputs).map_err(anyhow::Error::msg)
+}
+
+fn progress_bar() -> Option<indicatif::ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let b = indicatif::ProgressBar::new_spinner();
+    b.enable_steady_tick(std::time::Duration::from_millis(120));
+    Some(b)
+}
+
+fn bar_msg(bar: &Option<indicatif::ProgressBar>, msg: &str) {
+    if let Some(b) = bar {
+        b.set_message(msg.to_string());
+    }
+}

@@ -1,0 +1,79 @@
+//! Command-line parsing and dispatch. Each subcommand family lives in its own module.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+pub mod deform;
+pub mod geom;
+pub mod geom_import;
+pub mod mesh;
+pub mod param;
+pub mod section;
+pub mod surfgrid;
+
+/// CAD-linked shape parametrisation and grid update for aerodynamic shape optimisation.
+#[derive(Debug, Parser)]
+#[command(name = "aeroshape", version, about, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Deform a volume mesh from prescribed boundary motion (spring analogy, paper §4).
+    Deform(deform::DeformArgs),
+    /// Inspect and check geometric databases (RON).
+    #[command(subcommand)]
+    Geom(geom::GeomCmd),
+    /// Inspect grids (counts, markers, quality) and convert between .su2, .msh and .vtu.
+    #[command(subcommand)]
+    Mesh(mesh::MeshCmd),
+    /// List design variables and apply a design vector to a case's geometry (paper §5).
+    #[command(subcommand)]
+    Param(param::ParamCmd),
+    /// Fit and build wing sections (thickness parameters of Eq. 39, camber B-spline; §6.1).
+    #[command(subcommand)]
+    Section(section::SectionCmd),
+    /// Generate surface grids tied to the geometry (advancing front in the parametric
+    /// planes, §2.2–2.3) and classify imported grids on a geometric database.
+    #[command(subcommand)]
+    Surfgrid(surfgrid::SurfgridCmd),
+}
+
+/// Runs the program and maps the outcome to the exit status of the CLI contract.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // --help and --version print and exit 0; usage errors exit 2.
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", one_line(&e));
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Deform(args) => deform::run(args),
+        Command::Geom(cmd) => geom::run(cmd),
+        Command::Mesh(cmd) => mesh::run(cmd),
+        Command::Param(cmd) => param::run(cmd),
+        Command::Section(cmd) => section::run(cmd),
+        Command::Surfgrid(cmd) => surfgrid::run(cmd),
+    }
+}
+
+/// Flattens an error and its causes into a single line.
+fn one_line(e: &anyhow::Error) -> String {
+    let s = format!("{e:#}");
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}

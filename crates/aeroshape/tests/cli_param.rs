@@ -1,0 +1,300 @@
+//! `aeroshape param list|apply` end to end on the wing-body case (one modifier of each
+//! level), and the exact Jacobian of that case against central differences.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use aeroshape::case::{Case, load_design_values};
+use geom_db::GeomDb;
+use param::{MasterSources, Parametrisation, Prepared};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_aeroshape"))
+}
+
+fn root() -> PathBuf {
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).to_path_buf()
+}
+
+fn case_path() -> PathBuf {
+    root().join("fixtures/cases/wing_body_param.ron")
+}
+
+fn dv_path() -> PathBuf {
+    root().join("fixtures/cases/wing_body_dv.ron")
+}
+
+fn load() -> (Case, GeomDb) {
+    let case = Case::load(&case_path()).unwrap();
+    let g = case.geometry_path(&case_path());
+    let db = GeomDb::from_ron_str(&std::fs::read_to_string(&g).unwrap(), "g").unwrap();
+    (case, db)
+}
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn list_prints_variables_modifiers_and_constraints() {
+    let o = bin()
+        .args(["param", "list"])
+        .arg(case_path())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    for want in [
+        "tip_twist",
+        "hh_30",
+        "crown_4",
+        "fb_3_1",
+        "m_dihedral",
+        "total tip twist <= 0.08",
+    ] {
+        assert!(text.contains(want), "missing {want} in\n{text}");
+    }
+    let o = bin()
+        .args(["param", "list", "--json"])
+        .arg(case_path())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["variables"].as_array().unwrap().len(), 18);
+    let levels: Vec<&str> = v["modifiers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["level"].as_str().unwrap())
+        .collect();
+    assert_eq!(levels, ["node", "line", "line", "surface", "master"]);
+    assert!(
+        v["modifiers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|m| m["nodes_moved"].as_u64().unwrap() > 0)
+    );
+    assert_eq!(v["constraints"]["names"].as_array().unwrap().len(), 2);
+}
+
+#[test]
+fn apply_without_dv_reproduces_the_geometry_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.ron");
+    let o = bin()
+        .args(["param", "apply"])
+        .arg(case_path())
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let a = std::fs::read(&out).unwrap();
+    let b = std::fs::read(root().join("fixtures/geom/wing_body.ron")).unwrap();
+    assert!(a == b, "zero design vector changed the geometry file");
+}
+
+#[test]
+fn apply_writes_updated_geometry_and_jacobian() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.ron");
+    let jac = dir.path().join("j.json");
+    let o = bin()
+        .args(["param", "apply"])
+        .arg(case_path())
+        .arg("--dv")
+        .arg(dv_path())
+        .arg("-o")
+        .arg(&out)
+        .arg("--jacobian")
+        .arg(&jac)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.contains("curves re-intersected"), "{text}");
+    // the output is a valid database whose surface control nodes are the parametrisation's
+    let (case, db) = load();
+    let new = GeomDb::from_ron_str(&std::fs::read_to_string(&out).unwrap(), "out").unwrap();
+    let prep = case
+        .parametrisation
+        .bind(&db, &MasterSources::new())
+        .unwrap();
+    let x = prep
+        .registry()
+        .vector_from_values(&load_design_values(&dv_path()).unwrap())
+        .unwrap();
+    let (pts, j) = prep.apply_with_jacobian(&x).unwrap();
+    for s in &db.surfaces {
+        for id in s.control.nodes.iter().flatten() {
+            let (a, b) = (new.control_points()[id.index()], pts[id.index()]);
+            assert!((a - b).norm() <= 1e-12 * db.reference_length(), "{id}");
+        }
+    }
+    assert!(new.control_points() != db.control_points());
+    // the Jacobian file is the library's Jacobian
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&jac).unwrap()).unwrap();
+    assert_eq!(v["n_cols"], 18);
+    assert_eq!(
+        v["n_rows"].as_u64().unwrap() as usize,
+        3 * db.control_points().len()
+    );
+    let vals: Vec<f64> = v["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(vals.len(), j.values.len());
+    for (a, b) in vals.iter().zip(&j.values) {
+        // JSON text keeps ~17 significant digits
+        assert!((a - b).abs() <= 1e-15 * b.abs(), "{a} vs {b}");
+    }
+}
+
+fn fd_check(prep: &Prepared, x: &[f64], what: &str) {
+    let (_, j) = prep.apply_with_jacobian(x).unwrap();
+    for l in 0..x.len() {
+        let h = 1e-5 * x[l].abs().max(1.0);
+        let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
+        xp[l] += h;
+        xm[l] -= h;
+        let (pp, pm) = (prep.apply(&xp).unwrap(), prep.apply(&xm).unwrap());
+        let col = j.column(l);
+        let (mut err, mut size) = (0.0f64, 0.0f64);
+        for (k, (a, b)) in pp.iter().zip(&pm).enumerate() {
+            for c in 0..3 {
+                let fd = (a[c] - b[c]) / (2.0 * h);
+                size = size.max(fd.abs());
+                err = err.max((col[3 * k + c] - fd).abs());
+            }
+        }
+        assert!(size > 0.0, "{what}: column {l} is zero");
+        assert!(
+            err <= 1e-6 * size,
+            "{what}: column {l}: error {err:.3e} vs size {size:.3e}"
+        );
+    }
+}
+
+#[test]
+fn jacobian_of_every_modifier_of_the_case_matches_central_differences() {
+    let (case, db) = load();
+    let dv = load_design_values(&dv_path()).unwrap();
+    for m in &case.parametrisation.modifiers {
+        let p = Parametrisation {
+            modifiers: vec![m.clone()],
+            constraints: vec![],
+        };
+        let prep = p.bind(&db, &MasterSources::new()).unwrap();
+        let mut sub = param::DesignValues::new();
+        for v in prep.registry().variables() {
+            if let Some(&x) = dv.get(&v.name) {
+                sub.insert(v.name.clone(), x);
+            }
+        }
+        // the case's design vector, with every variable non-zero
+        let mut x = prep.registry().vector_from_values(&sub).unwrap();
+        for (xi, v) in x.iter_mut().zip(prep.registry().variables()) {
+            if *xi == 0.0 {
+                *xi = 0.3 * v.upper;
+            }
+        }
+        fd_check(&prep, &x, m.name());
+    }
+    let prep = case
+        .parametrisation
+        .bind(&db, &MasterSources::new())
+        .unwrap();
+    let x = prep.registry().vector_from_values(&dv).unwrap();
+    fd_check(&prep, &x, "composition");
+}
+
+#[test]
+fn bounds_unknown_names_and_constraints_are_user_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.ron");
+    let run = |dv: &str, extra: &[&str]| {
+        let p = dir.path().join("dv.ron");
+        std::fs::write(&p, dv).unwrap();
+        bin()
+            .args(["param", "apply"])
+            .arg(case_path())
+            .arg("--dv")
+            .arg(&p)
+            .arg("-o")
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run("{\"tip_twist\": 0.5}", &[]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("tip_twist") && stderr(&o).contains("[-0.1, 0.1]"),
+        "{}",
+        stderr(&o)
+    );
+    let o = run("{\"wing_span\": 1.0}", &[]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("'wing_span'"), "{}", stderr(&o));
+    let o = run("{\"tip_twist\": 0.06, \"m_twist\": 0.05}", &[]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("total tip twist <= 0.08"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+    let o = run(
+        "{\"tip_twist\": 0.06, \"m_twist\": 0.05}",
+        &["--allow-infeasible"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning: constraint 'total tip twist <= 0.08'"));
+    let o = run("{\"tip_twist\": }", &[]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("dv.ron:1:"), "{}", stderr(&o));
+}
+
+#[test]
+fn refuses_to_overwrite_an_input_and_reports_case_errors() {
+    let o = bin()
+        .args(["param", "apply"])
+        .arg(case_path())
+        .arg("-o")
+        .arg(root().join("fixtures/geom/wing_body.ron"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("overwrite an input"), "{}", stderr(&o));
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("case.ron");
+    std::fs::write(&bad, "(format_version: 1,\n geometry: \"g.ron\",\n parametrisation: (modifiers: [Node(name: 1)]))").unwrap();
+    let o = bin().args(["param", "list"]).arg(&bad).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("case.ron:3:"), "{}", stderr(&o));
+    // a link to a missing surface names the modifier and the entity
+    std::fs::copy(
+        root().join("fixtures/geom/wing_body.ron"),
+        dir.path().join("g.ron"),
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(case_path())
+        .unwrap()
+        .replace("../geom/wing_body.ron", "g.ron")
+        .replace(
+            "surfaces: [0],\n        basis_u",
+            "surfaces: [7],\n        basis_u",
+        );
+    std::fs::write(&bad, text).unwrap();
+    let o = bin().args(["param", "list"]).arg(&bad).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("'fuselage_bulge'") && stderr(&o).contains("surface 7"),
+        "{}",
+        stderr(&o)
+    );
+}

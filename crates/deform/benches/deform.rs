@@ -1,0 +1,407 @@
+//! Benchmarks of `deform`: SpMV against a STREAM-triad bandwidth measured in the same run,
+//! PCG (Jacobi and multigrid) on the spring system, and the whole deformation of a
+//! wing-like block in a box pitched by 5° with the symmetry plane sliding and the far field
+//! fixed, at ~50k, ~300k and ~1M nodes.
+//!
+//! `cargo bench -p deform --bench deform` runs the criterion groups on the 50k grid and, first,
+//! prints a table of figures for the sizes in `DEFORM_BENCH_SIZES` (cubes per side, default
+//! "46,84" for ~50k and ~300k nodes; add 126 for ~1M nodes).
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use criterion::{Criterion, Throughput};
+use deform::generate::box_with_block;
+use deform::solve::vecops::V3;
+use deform::solve::{Amg, AmgOptions, Constraints, Jacobi, SolveOptions, SymMatrix, pcg};
+use deform::{BoundaryConditions, DeformOptions, MarkerRole, RigidMotion, SolverKind, deform};
+use mesh::Mesh;
+use rayon::prelude::*;
+
+/// The wing-like case: box [0,4]×[0,2]×[0,4], block (the "wing") x ∈ [1.5, 2.5],
+/// y ∈ [0, 1], z ≈ [1.88, 2.12] touching the symmetry plane y = 0.
+fn case(n: usize) -> (Mesh, BoundaryConditions) {
+    let ny = n / 2;
+    // n = 46, 84, 126 give ~53k, ~310k, ~1.03M nodes.
+    let b0 = [(0.375 * n as f64) as usize, 0, (0.47 * n as f64) as usize];
+    let b1 = [
+        (0.625 * n as f64) as usize,
+        ny / 2,
+        ((0.53 * n as f64) as usize).max(b0[2] + 1),
+    ];
+    let m = box_with_block([n, ny, n], [0.0; 3], [4.0, 2.0, 4.0], b0, b1);
+    let bc = BoundaryConditions {
+        markers: vec![
+            (
+                "wing".into(),
+                MarkerRole::Rigid(RigidMotion {
+                    angle_deg: -5.0,
+                    axis_point: [1.75, 0.0, 2.0],
+                    axis_dir: [0.0, 1.0, 0.0],
+                    translation: [0.0; 3],
+                }),
+            ),
+            ("y_m".into(), MarkerRole::SlidePlane),
+        ],
+        displacements: vec![],
+    };
+    (m, bc)
+}
+
+/// CPU seconds (user + system, all threads) of this process so far, from /proc/self/stat
+/// (clock ticks of 1/100 s): on a machine shared with other jobs, CPU time / threads is the
+/// wall time the run would take with the cores to itself.
+fn cpu_s() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            let rest = s.rsplit(')').next()?.split_whitespace().collect::<Vec<_>>();
+            let u: f64 = rest.get(11)?.parse().ok()?;
+            let k: f64 = rest.get(12)?.parse().ok()?;
+            Some((u + k) / 100.0)
+        })
+        .unwrap_or(f64::NAN)
+}
+
+fn peak_rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| {
+                l.split_whitespace()
+                    .nth(1)
+                    .and_then(|v| v.parse::<f64>().ok())
+            })
+        })
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}
+
+/// STREAM triad a = b + s c over 3-vectors; returns GB/s (24 bytes per scalar element moved).
+fn triad_gbs(len: usize) -> f64 {
+    let b: Vec<V3> = (0..len).map(|i| [i as f64, 1.0, 2.0]).collect();
+    let c: Vec<V3> = (0..len).map(|i| [1.0, i as f64, 3.0]).collect();
+    let mut a: Vec<V3> = vec![[0.0; 3]; len];
+    let mut best = f64::INFINITY;
+    for _ in 0..10 {
+        let t = Instant::now();
+        a.par_chunks_mut(4096)
+            .zip(b.par_chunks(4096).zip(c.par_chunks(4096)))
+            .for_each(|(ca, (cb, cc))| {
+                for ((x, y), z) in ca.iter_mut().zip(cb).zip(cc) {
+                    for k in 0..3 {
+                        x[k] = y[k] + 3.0 * z[k];
+                    }
+                }
+            });
+        best = best.min(t.elapsed().as_secs_f64());
+        black_box(&a);
+    }
+    (len * 3 * 8 * 3) as f64 / best / 1e9
+}
+
+/// Bytes one SpMV moves at least: matrix (values, columns, offsets, diagonal), x once, y.
+fn spmv_bytes(a: &SymMatrix) -> f64 {
+    (a.nnz_offdiag() * 12 + a.n() * (8 + 8 + 24 + 24)) as f64
+}
+
+fn spmv_gbs(a: &SymMatrix) -> f64 {
+    let x: Vec<V3> = (0..a.n()).map(|i| [i as f64, 1.0, -1.0]).collect();
+    let mut y = vec![[0.0; 3]; a.n()];
+    let mut best = f64::INFINITY;
+    for _ in 0..10 {
+        let t = Instant::now();
+        a.mul(&x, &mut y);
+        best = best.min(t.elapsed().as_secs_f64());
+        black_box(&y);
+    }
+    spmv_bytes(a) / best / 1e9
+}
+
+/// The assembled Eq. 21 system of the case (matrix in solver order and right-hand side), via
+/// a deformation with an iteration limit of 0 is not possible, so rebuild it here: the spring
+/// matrix with K = 1/l² on interior + sliding nodes, RHS from the rigid motion of the wing.
+fn system(m: &Mesh, bc: &BoundaryConditions) -> (SymMatrix, Vec<V3>) {
+    // Use the library's own path: deform with the point iteration limited to 0 iterations
+    // would error; instead assemble a plain Laplacian system with the same pattern.
+    let adj = mesh::Adjacency::build(m);
+    let n = m.n_nodes();
+    let mut on = vec![0u8; n]; // 1 fixed, 2 moving
+    for mk in &m.markers {
+        let tag = if mk.name == "wing" {
+            2
+        } else if mk.name == "y_m" {
+            0
+        } else {
+            1
+        };
+        for v in mk.elements.node_set() {
+            on[v as usize] = on[v as usize].max(tag);
+        }
+    }
+    let motion = match bc.markers[0].1 {
+        MarkerRole::Rigid(r) => r,
+        _ => unreachable!(),
+    };
+    let mut num = vec![u32::MAX; n];
+    let mut cnt = 0u32;
+    for i in 0..n {
+        if on[i] == 0 {
+            num[i] = cnt;
+            cnt += 1;
+        }
+    }
+    let x = &m.coords;
+    let mut diag = Vec::new();
+    let mut offsets = vec![0usize];
+    let mut cols = Vec::new();
+    let mut vals = Vec::new();
+    let mut b = Vec::new();
+    for i in 0..n {
+        if num[i] == u32::MAX {
+            continue;
+        }
+        let mut d = 0.0;
+        let mut bi = [0.0; 3];
+        for &j in adj.neighbours(i) {
+            let j = j as usize;
+            let l2: f64 = (0..3).map(|k| (x[j][k] - x[i][k]).powi(2)).sum();
+            let k = 1.0 / l2;
+            d += k;
+            if num[j] != u32::MAX {
+                cols.push(num[j]);
+                vals.push(-k);
+            } else if on[j] == 2 {
+                let t = motion.apply(x[j], 1.0);
+                for q in 0..3 {
+                    bi[q] += k * (t[q] - x[j][q]);
+                }
+            }
+        }
+        diag.push(d);
+        offsets.push(cols.len());
+        b.push(bi);
+    }
+    (
+        SymMatrix {
+            diag,
+            offsets,
+            cols,
+            vals,
+        },
+        b,
+    )
+}
+
+/// `DEFORM_BENCH_STIFFNESS` = `l`, `l2` (default) or `volume`.
+fn stiffness_from_env() -> deform::Stiffness {
+    match std::env::var("DEFORM_BENCH_STIFFNESS").as_deref() {
+        Ok("l") => deform::Stiffness::InverseLength,
+        Ok("volume") => deform::Stiffness::Volume,
+        _ => deform::Stiffness::InverseLengthSquared,
+    }
+}
+
+fn figures() {
+    let sizes: Vec<usize> = std::env::var("DEFORM_BENCH_SIZES")
+        .unwrap_or_else(|_| "46,84".into())
+        .split(',')
+        .filter_map(|s| s.trim().parse().ok())
+        .collect();
+    println!("threads: {}", rayon::current_num_threads());
+    for &n in &sizes {
+        let t = Instant::now();
+        let (m, bc) = case(n);
+        let t_gen = t.elapsed().as_secs_f64();
+        println!(
+            "\n== n = {n}: {} nodes, {} tets (generated in {t_gen:.2} s)",
+            m.n_nodes(),
+            m.tets().len()
+        );
+        // Linear solves on the system (natural order of the generator).
+        let (a, b) = system(&m, &bc);
+        let triad = triad_gbs(4_000_000);
+        let spmv = spmv_gbs(&a);
+        println!(
+            "bandwidth: triad {triad:.2} GB/s, SpMV {spmv:.2} GB/s ({:.0} %), nnz/row {:.1}",
+            100.0 * spmv / triad,
+            a.nnz_offdiag() as f64 / a.n() as f64
+        );
+        let so = SolveOptions {
+            rel_tol: 1e-8,
+            max_iters: 20_000,
+        };
+        let none = Constraints::default();
+        let mut x = vec![[0.0; 3]; a.n()];
+        let t = Instant::now();
+        let c0 = cpu_s();
+        let j = Jacobi::new(&a);
+        let r = pcg(&a, &b, &mut x, &j, &none, &so);
+        let tj = t.elapsed().as_secs_f64();
+        let cj = cpu_s() - c0;
+        println!(
+            "pcg-jacobi: {} it, {tj:.3} s (cpu {cj:.2} s), {:.2} ms/it, residual {:.1e}",
+            r.iterations,
+            1e3 * tj / r.iterations.max(1) as f64,
+            r.rel_residual
+        );
+        let t = Instant::now();
+        let strength = std::env::var("DEFORM_AMG_STRENGTH")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(AmgOptions::default().strength);
+        let amg = Amg::new(
+            &a,
+            &AmgOptions {
+                strength,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let setup = t.elapsed().as_secs_f64();
+        let mut x = vec![[0.0; 3]; a.n()];
+        let t = Instant::now();
+        let r = pcg(&a, &b, &mut x, &amg, &none, &so);
+        let ts = t.elapsed().as_secs_f64();
+        let ca = cpu_s() - c0;
+        let info = amg.info();
+        println!(
+            "pcg-amg: setup {setup:.3} s + {} it {ts:.3} s = {:.3} s (cpu {ca:.2} s), {:.2} ms/it, residual {:.1e}, levels {:?}, op. complexity {:.2}",
+            r.iterations,
+            setup + ts,
+            1e3 * ts / r.iterations.max(1) as f64,
+            r.rel_residual,
+            info.sizes,
+            info.operator_complexity
+        );
+        drop(amg);
+        if std::env::var("DEFORM_BENCH_SOLVES_ONLY").is_ok() {
+            continue;
+        }
+        // Whole deformation.
+        for (name, solver) in [
+            ("multigrid", SolverKind::PcgMultigrid),
+            ("jacobi-pcg", SolverKind::PcgJacobi),
+        ] {
+            let t = Instant::now();
+            let c0 = cpu_s();
+            let d = deform(
+                &m,
+                &bc,
+                &DeformOptions {
+                    solver,
+                    stiffness: stiffness_from_env(),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            let tt = t.elapsed().as_secs_f64();
+            let ct = cpu_s() - c0;
+            let r = &d.report;
+            println!(
+                "deform [{name}]: {tt:.2} s total (cpu {ct:.2} s); it {} (+{} for R), increments {}; s: setup {:.2} assemble {:.2} precond {:.2} rotation {:.2} solve {:.2} quality {:.2}; q min {:.4} -> {:.4} ({:.1} %), p1 {:.4} -> {:.4}, inverted {}",
+                r.iterations,
+                r.rotation_iterations,
+                r.increments,
+                r.seconds.setup,
+                r.seconds.assemble,
+                r.seconds.precond,
+                r.seconds.rotation,
+                r.seconds.solve,
+                r.seconds.quality,
+                r.quality_before.min,
+                r.quality_after.min,
+                100.0 * r.quality_after.min / r.quality_before.min,
+                r.quality_before.p1,
+                r.quality_after.p1,
+                r.quality_after.inverted
+            );
+        }
+        // Without R and with the symmetry plane fixed (the naive setup), for comparison.
+        let naive = BoundaryConditions {
+            markers: vec![bc.markers[0].clone()],
+            displacements: vec![],
+        };
+        let d = deform(
+            &m,
+            &naive,
+            &DeformOptions {
+                adapt_rotation: false,
+                max_increments: 1,
+                allow_inverted: true,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        println!(
+            "naive (no R, plane fixed): q min {:.4}, inverted {}",
+            d.report.quality_after.min, d.report.quality_after.inverted
+        );
+        // Random numbering.
+        let mut shuffled = m.clone();
+        mesh::generate::shuffle_nodes(&mut shuffled, 42);
+        for (label, mm, renumber) in [
+            ("ordered", &m, true),
+            ("random+RCM", &shuffled, true),
+            ("random, no RCM", &shuffled, false),
+        ] {
+            if m.n_nodes() > 500_000 && !renumber {
+                continue;
+            }
+            let t = Instant::now();
+            let d = deform(
+                mm,
+                &bc,
+                &DeformOptions {
+                    renumber,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            println!(
+                "numbering {label}: {:.2} s (solve {:.2} s, {} it)",
+                t.elapsed().as_secs_f64(),
+                d.report.seconds.solve,
+                d.report.iterations
+            );
+        }
+        println!("peak RSS so far: {:.0} MB", peak_rss_mb());
+    }
+}
+
+fn benches(c: &mut Criterion) {
+    let (m, bc) = case(46);
+    let (a, b) = system(&m, &bc);
+    let x: Vec<V3> = (0..a.n()).map(|i| [i as f64, 1.0, -1.0]).collect();
+    let mut y = vec![[0.0; 3]; a.n()];
+    let mut g = c.benchmark_group("kernels");
+    g.throughput(Throughput::Elements(a.n() as u64));
+    g.bench_function("spmv3_50k", |bch| bch.iter(|| a.mul(black_box(&x), &mut y)));
+    g.sample_size(10);
+    g.bench_function("pcg_amg_50k", |bch| {
+        bch.iter(|| {
+            let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+            let mut x = vec![[0.0; 3]; a.n()];
+            pcg(
+                &a,
+                &b,
+                &mut x,
+                &amg,
+                &Constraints::default(),
+                &SolveOptions::default(),
+            )
+        })
+    });
+    g.bench_function("deform_50k", |bch| {
+        bch.iter(|| deform(&m, &bc, &DeformOptions::default()).unwrap())
+    });
+    g.finish();
+}
+
+fn main() {
+    figures();
+    if std::env::var("DEFORM_BENCH_FIGURES_ONLY").is_err() {
+        let mut c = Criterion::default().configure_from_args();
+        benches(&mut c);
+        c.final_summary();
+    }
+}

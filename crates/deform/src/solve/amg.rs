@@ -1,0 +1,596 @@
+//! Smoothed-aggregation algebraic multigrid (Vaněk, Mandel, Brezina), used as a V-cycle
+//! preconditioner for conjugate gradients on the spring matrix.
+//!
+//! Setup, per level: strength of connection |a_ij| ≥ θ √(a_ii a_jj); greedy aggregation in
+//! three passes (root nodes whose strong neighbours are all free, then attachment of the
+//! remaining nodes to a neighbouring aggregate, then leftover groups); tentative prolongator
+//! P₀ piecewise constant on aggregates (the constant is the near-null space of the spring
+//! Laplacian); smoothed prolongator P = (I − ω D⁻¹ A) P₀ with ω = 4 / (3 ρ), ρ bounded by
+//! Gershgorin's max_i Σ_j |a_ij| / a_ii; Galerkin coarse matrix A_c = Pᵀ A P. The coarsest
+//! level (≤ `max_coarse` unknowns) is solved by a dense Cholesky factorisation.
+//!
+//! Cycle: damped Jacobi pre- and post-smoothing (the same symmetric smoother on both sides,
+//! so the V-cycle is a symmetric positive definite preconditioner), three components at once.
+//! Every kernel is deterministic for any thread count.
+
+use std::sync::Mutex;
+
+use rayon::prelude::*;
+
+use super::csr::{Csr, SymMatrix};
+use super::pcg::Preconditioner;
+use super::vecops::{CHUNK, V3};
+use crate::error::{Error, Result};
+
+/// Multigrid setup options.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AmgOptions {
+    /// Strength threshold θ on the finest level, halved on each coarser level (0 keeps every
+    /// connection: aggregates of ~20 nodes, cheapest setup; measured faster overall than 0.08
+    /// on the benchmark grids, see docs/performance.md).
+    pub strength: f64,
+    /// Stop coarsening when a level has at most this many unknowns.
+    pub max_coarse: usize,
+    /// Maximum number of levels.
+    pub max_levels: usize,
+    /// Jacobi sweeps before and after the coarse-grid correction.
+    pub sweeps: usize,
+}
+
+impl Default for AmgOptions {
+    fn default() -> Self {
+        Self {
+            strength: 0.0,
+            max_coarse: 400,
+            max_levels: 12,
+            sweeps: 1,
+        }
+    }
+}
+
+struct Level {
+    /// Prolongator from the next coarser level.
+    p: Csr,
+    /// Restriction Pᵀ.
+    r: Csr,
+    /// Smoother weights ω / a_ii.
+    wdiag: Vec<f64>,
+}
+
+/// A smoothed-aggregation multigrid hierarchy over a borrowed fine matrix.
+pub struct Amg<'a> {
+    fine: &'a SymMatrix,
+    levels: Vec<Level>,
+    /// Coarse matrices A_1 … A_L (A_0 is `fine`).
+    coarse: Vec<SymMatrix>,
+    chol: DenseCholesky,
+    sweeps: usize,
+    scratch: Mutex<Vec<Scratch>>,
+}
+
+struct Scratch {
+    b: Vec<V3>,
+    x: Vec<V3>,
+    r: Vec<V3>,
+}
+
+/// Summary of a hierarchy.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct AmgInfo {
+    /// Unknowns per level, finest first.
+    pub sizes: Vec<usize>,
+    /// Stored off-diagonal entries per level.
+    pub nnz: Vec<usize>,
+    /// Operator complexity Σ nnz(A_l) / nnz(A_0) (diagonals included).
+    pub operator_complexity: f64,
+}
+
+impl<'a> Amg<'a> {
+    /// Builds the hierarchy for `a` (symmetric positive definite, positive diagonal).
+    pub fn new(a: &'a SymMatrix, opts: &AmgOptions) -> Result<Self> {
+        let mut levels = Vec::new();
+        let mut coarse: Vec<SymMatrix> = Vec::new();
+        loop {
+            let cur: &SymMatrix = coarse.last().unwrap_or(a);
+            if cur.n() <= opts.max_coarse || levels.len() + 1 >= opts.max_levels {
+                break;
+            }
+            // The threshold halves on each coarser level (coarse operators have more, weaker
+            // connections per row).
+            let theta = opts.strength * 0.5f64.powi(levels.len() as i32);
+            let trace = std::env::var_os("DEFORM_AMG_TRACE").is_some();
+            let t0 = std::time::Instant::now();
+            let (agg, nagg) = aggregate(cur, theta);
+            let t_agg = t0.elapsed().as_secs_f64();
+            if nagg == 0 || nagg * 10 > cur.n() * 9 {
+                // Coarsening stalled: stop here.
+                break;
+            }
+            let rho = gershgorin(cur);
+            let omega = 4.0 / (3.0 * rho);
+            let p = smoothed_prolongator(cur, &agg, nagg, omega);
+            let t_p = t0.elapsed().as_secs_f64();
+            let r = p.transpose();
+            let t_r = t0.elapsed().as_secs_f64();
+            let ac = galerkin(cur, &p, &r);
+            if trace {
+                eprintln!(
+                    "amg level {}: n {} -> {nagg}, aggregate {t_agg:.3} s, P {:.3} s, Pt {:.3} s, RAP {:.3} s",
+                    levels.len(),
+                    cur.n(),
+                    t_p - t_agg,
+                    t_r - t_p,
+                    t0.elapsed().as_secs_f64() - t_r
+                );
+            }
+            let wdiag = cur.diag.iter().map(|d| omega / d).collect();
+            levels.push(Level { p, r, wdiag });
+            coarse.push(ac);
+        }
+        let last: &SymMatrix = coarse.last().unwrap_or(a);
+        let chol = DenseCholesky::new(last, levels.len())?;
+        let mut scratch = Vec::new();
+        for l in 0..levels.len() {
+            let n = if l == 0 { a.n() } else { coarse[l - 1].n() };
+            scratch.push(Scratch {
+                b: vec![[0.0; 3]; n],
+                x: vec![[0.0; 3]; n],
+                r: vec![[0.0; 3]; n],
+            });
+        }
+        let nc = last.n();
+        scratch.push(Scratch {
+            b: vec![[0.0; 3]; nc],
+            x: vec![[0.0; 3]; nc],
+            r: Vec::new(),
+        });
+        Ok(Self {
+            fine: a,
+            levels,
+            coarse,
+            chol,
+            sweeps: opts.sweeps.max(1),
+            scratch: Mutex::new(scratch),
+        })
+    }
+
+    /// Sizes and complexity of the hierarchy.
+    pub fn info(&self) -> AmgInfo {
+        let mut sizes = vec![self.fine.n()];
+        let mut nnz = vec![self.fine.nnz_offdiag()];
+        for c in &self.coarse {
+            sizes.push(c.n());
+            nnz.push(c.nnz_offdiag());
+        }
+        let tot: usize = sizes.iter().zip(&nnz).map(|(s, z)| s + z).sum();
+        AmgInfo {
+            operator_complexity: tot as f64 / (sizes[0] + nnz[0]) as f64,
+            sizes,
+            nnz,
+        }
+    }
+
+    fn matrix(&self, l: usize) -> &SymMatrix {
+        if l == 0 {
+            self.fine
+        } else {
+            &self.coarse[l - 1]
+        }
+    }
+
+    fn vcycle(&self, l: usize, s: &mut [Scratch]) {
+        if l == self.levels.len() {
+            let sc = &mut s[l];
+            self.chol.solve(&sc.b, &mut sc.x);
+            return;
+        }
+        let a = self.matrix(l);
+        let lev = &self.levels[l];
+        {
+            let (head, tail) = s.split_at_mut(l + 1);
+            let sc = &mut head[l];
+            // Pre-smoothing from x = 0: x = W b, then x += W (b − A x).
+            let w = &lev.wdiag;
+            sc.x.par_chunks_mut(CHUNK)
+                .zip(sc.b.par_chunks(CHUNK))
+                .enumerate()
+                .for_each(|(c, (xs, bs))| {
+                    let r0 = c * CHUNK;
+                    for (k, (xi, bi)) in xs.iter_mut().zip(bs).enumerate() {
+                        let wk = w[r0 + k];
+                        *xi = [wk * bi[0], wk * bi[1], wk * bi[2]];
+                    }
+                });
+            for _ in 1..self.sweeps {
+                jacobi_sweep(a, w, &sc.b, &mut sc.x, &mut sc.r);
+            }
+            // Restrict the residual.
+            a.residual(&sc.b, &sc.x, &mut sc.r);
+            spmv_csr(&lev.r, &sc.r, &mut tail[0].b);
+        }
+        self.vcycle(l + 1, s);
+        let (head, tail) = s.split_at_mut(l + 1);
+        let sc = &mut head[l];
+        // Prolongate and correct; post-smoothing.
+        spmv_csr_add(&lev.p, &tail[0].x, &mut sc.x);
+        for _ in 0..self.sweeps {
+            jacobi_sweep(a, &lev.wdiag, &sc.b, &mut sc.x, &mut sc.r);
+        }
+    }
+}
+
+impl Preconditioner for Amg<'_> {
+    fn apply(&self, r: &[V3], z: &mut [V3]) {
+        let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        let s = &mut guard[..];
+        s[0].b.copy_from_slice(r);
+        self.vcycle(0, s);
+        z.copy_from_slice(&s[0].x);
+    }
+    fn name(&self) -> &'static str {
+        "amg"
+    }
+    fn bytes(&self) -> usize {
+        let mut b = 0;
+        for (l, lev) in self.levels.iter().enumerate() {
+            b += (lev.p.cols.len() + lev.r.cols.len()) * 12 + lev.wdiag.len() * 8;
+            if l > 0 {
+                b += self.coarse[l - 1].bytes();
+            }
+        }
+        b + self.coarse.last().map_or(0, |c| c.bytes()) + self.chol.l.len() * 8
+    }
+}
+
+/// x ← x + W (b − A x); `r` is scratch.
+fn jacobi_sweep(a: &SymMatrix, w: &[f64], b: &[V3], x: &mut [V3], r: &mut [V3]) {
+    a.residual(b, x, r);
+    x.par_chunks_mut(CHUNK)
+        .zip(r.par_chunks(CHUNK))
+        .enumerate()
+        .for_each(|(c, (xs, rs))| {
+            let r0 = c * CHUNK;
+            for (k, (xi, ri)) in xs.iter_mut().zip(rs).enumerate() {
+                let wk = w[r0 + k];
+                for d in 0..3 {
+                    xi[d] += wk * ri[d];
+                }
+            }
+        });
+}
+
+/// y ← M x for a general CSR matrix.
+fn spmv_csr(m: &Csr, x: &[V3], y: &mut [V3]) {
+    y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
+        let r0 = c * CHUNK;
+        for (k, yi) in ys.iter_mut().enumerate() {
+            let i = r0 + k;
+            let mut s = [0.0; 3];
+            for p in m.offsets[i]..m.offsets[i + 1] {
+                let v = m.vals[p];
+                let xj = x[m.cols[p] as usize];
+                s[0] += v * xj[0];
+                s[1] += v * xj[1];
+                s[2] += v * xj[2];
+            }
+            *yi = s;
+        }
+    });
+}
+
+/// y ← y + M x.
+fn spmv_csr_add(m: &Csr, x: &[V3], y: &mut [V3]) {
+    y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
+        let r0 = c * CHUNK;
+        for (k, yi) in ys.iter_mut().enumerate() {
+            let i = r0 + k;
+            for p in m.offsets[i]..m.offsets[i + 1] {
+                let v = m.vals[p];
+                let xj = x[m.cols[p] as usize];
+                yi[0] += v * xj[0];
+                yi[1] += v * xj[1];
+                yi[2] += v * xj[2];
+            }
+        }
+    });
+}
+
+/// Gershgorin bound of ρ(D⁻¹A).
+fn gershgorin(a: &SymMatrix) -> f64 {
+    (0..a.n())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|i| {
+            let s: f64 = a.vals[a.offsets[i]..a.offsets[i + 1]]
+                .iter()
+                .map(|v| v.abs())
+                .sum();
+            1.0 + s / a.diag[i]
+        })
+        .reduce(|| 0.0, f64::max)
+}
+
+/// Greedy aggregation; returns the aggregate of every node and the aggregate count.
+fn aggregate(a: &SymMatrix, theta: f64) -> (Vec<u32>, usize) {
+    const NONE: u32 = u32::MAX;
+    let n = a.n();
+    let strong = |i: usize, p: usize| {
+        let j = a.cols[p] as usize;
+        a.vals[p].abs() >= theta * (a.diag[i] * a.diag[j]).abs().sqrt()
+    };
+    let mut agg = vec![NONE; n];
+    let mut nagg = 0u32;
+    // Pass 1: roots whose strong neighbourhood is entirely unaggregated.
+    for i in 0..n {
+        if agg[i] != NONE {
+            continue;
+        }
+        let mut any_strong = false;
+        let mut free = true;
+        for p in a.offsets[i]..a.offsets[i + 1] {
+            if strong(i, p) {
+                any_strong = true;
+                if agg[a.cols[p] as usize] != NONE {
+                    free = false;
+                    break;
+                }
+            }
+        }
+        if any_strong && free {
+            agg[i] = nagg;
+            for p in a.offsets[i]..a.offsets[i + 1] {
+                if strong(i, p) {
+                    agg[a.cols[p] as usize] = nagg;
+                }
+            }
+            nagg += 1;
+        }
+    }
+    // Pass 2: attach to the strongest neighbouring pass-1 aggregate.
+    let snapshot = agg.clone();
+    for i in 0..n {
+        if agg[i] != NONE {
+            continue;
+        }
+        let mut best = (0.0, NONE);
+        for p in a.offsets[i]..a.offsets[i + 1] {
+            let g = snapshot[a.cols[p] as usize];
+            if g != NONE && strong(i, p) && a.vals[p].abs() > best.0 {
+                best = (a.vals[p].abs(), g);
+            }
+        }
+        agg[i] = best.1;
+    }
+    // Pass 3: leftovers form aggregates with their unaggregated strong neighbours.
+    for i in 0..n {
+        if agg[i] != NONE {
+            continue;
+        }
+        agg[i] = nagg;
+        for p in a.offsets[i]..a.offsets[i + 1] {
+            let j = a.cols[p] as usize;
+            if agg[j] == NONE && strong(i, p) {
+                agg[j] = nagg;
+            }
+        }
+        nagg += 1;
+    }
+    (agg, nagg as usize)
+}
+
+/// P = (I − ω D⁻¹ A) P₀, P₀ the aggregate indicator.
+fn smoothed_prolongator(a: &SymMatrix, agg: &[u32], nagg: usize, omega: f64) -> Csr {
+    Csr::from_rows(a.n(), nagg, |i, buf| {
+        buf.push((agg[i], 1.0 - omega));
+        let s = omega / a.diag[i];
+        for p in a.offsets[i]..a.offsets[i + 1] {
+            buf.push((agg[a.cols[p] as usize], -s * a.vals[p]));
+        }
+        super::csr::merge_row(buf);
+    })
+}
+
+/// Dense accumulator for sparse row products (per task scratch).
+struct Acc {
+    val: Vec<f64>,
+    used: Vec<bool>,
+    list: Vec<u32>,
+}
+
+impl Acc {
+    fn new(n: usize) -> Self {
+        Self {
+            val: vec![0.0; n],
+            used: vec![false; n],
+            list: Vec::new(),
+        }
+    }
+    #[inline]
+    fn add(&mut self, c: u32, v: f64) {
+        let ci = c as usize;
+        if !self.used[ci] {
+            self.used[ci] = true;
+            self.val[ci] = v;
+            self.list.push(c);
+        } else {
+            self.val[ci] += v;
+        }
+    }
+    fn drain(&mut self, out_c: &mut Vec<u32>, out_v: &mut Vec<f64>) -> usize {
+        self.list.sort_unstable();
+        let n = self.list.len();
+        for &c in &self.list {
+            out_c.push(c);
+            out_v.push(self.val[c as usize]);
+            self.used[c as usize] = false;
+        }
+        self.list.clear();
+        n
+    }
+}
+
+/// Row-parallel sparse product with a dense accumulator per task; `row(i, acc)` adds the
+/// contributions of row i in a fixed order.
+fn product_rows<F>(nrows: usize, ncols: usize, row: F) -> Csr
+where
+    F: Fn(usize, &mut Acc) + Sync,
+{
+    let blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..nrows.div_ceil(CHUNK))
+        .into_par_iter()
+        .map_init(
+            || Acc::new(ncols),
+            |acc, b| {
+                let lo = b * CHUNK;
+                let hi = (lo + CHUNK).min(nrows);
+                let mut lens = Vec::with_capacity(hi - lo);
+                let mut cols = Vec::new();
+                let mut vals = Vec::new();
+                for i in lo..hi {
+                    row(i, acc);
+                    lens.push(acc.drain(&mut cols, &mut vals));
+                }
+                (lens, cols, vals)
+            },
+        )
+        .collect();
+    let total: usize = blocks.iter().map(|b| b.1.len()).sum();
+    let mut offsets = Vec::with_capacity(nrows + 1);
+    offsets.push(0usize);
+    let mut cols = Vec::with_capacity(total);
+    let mut vals = Vec::with_capacity(total);
+    let mut last = 0;
+    for (lens, c, v) in blocks {
+        for l in lens {
+            last += l;
+            offsets.push(last);
+        }
+        cols.extend_from_slice(&c);
+        vals.extend_from_slice(&v);
+    }
+    Csr {
+        ncols,
+        offsets,
+        cols,
+        vals,
+    }
+}
+
+/// A_c = R A P with R = Pᵀ, returned with its diagonal apart.
+fn galerkin(a: &SymMatrix, p: &Csr, r: &Csr) -> SymMatrix {
+    let nc = p.ncols;
+    let ap = product_rows(a.n(), nc, |i, acc| {
+        let d = a.diag[i];
+        for q in p.offsets[i]..p.offsets[i + 1] {
+            acc.add(p.cols[q], d * p.vals[q]);
+        }
+        for k in a.offsets[i]..a.offsets[i + 1] {
+            let j = a.cols[k] as usize;
+            let v = a.vals[k];
+            for q in p.offsets[j]..p.offsets[j + 1] {
+                acc.add(p.cols[q], v * p.vals[q]);
+            }
+        }
+    });
+    let rap = product_rows(nc, nc, |i, acc| {
+        for k in r.offsets[i]..r.offsets[i + 1] {
+            let j = r.cols[k] as usize;
+            let v = r.vals[k];
+            for q in ap.offsets[j]..ap.offsets[j + 1] {
+                acc.add(ap.cols[q], v * ap.vals[q]);
+            }
+        }
+    });
+    // Split off the diagonal and symmetrise round-off: a_ij ← (a_ij + a_ji) / 2 is not
+    // needed for CG's correctness, the product RAP is symmetric up to round-off only.
+    let mut diag = vec![0.0; nc];
+    let mut offsets = vec![0usize; nc + 1];
+    let mut cols = Vec::with_capacity(rap.cols.len());
+    let mut vals = Vec::with_capacity(rap.cols.len());
+    for i in 0..nc {
+        for q in rap.offsets[i]..rap.offsets[i + 1] {
+            let c = rap.cols[q];
+            if c as usize == i {
+                diag[i] = rap.vals[q];
+            } else {
+                cols.push(c);
+                vals.push(rap.vals[q]);
+            }
+        }
+        offsets[i + 1] = cols.len();
+    }
+    SymMatrix {
+        diag,
+        offsets,
+        cols,
+        vals,
+    }
+}
+
+/// Dense Cholesky factor of the coarsest matrix (row-major lower triangle).
+struct DenseCholesky {
+    n: usize,
+    l: Vec<f64>,
+}
+
+impl DenseCholesky {
+    fn new(a: &SymMatrix, level: usize) -> Result<Self> {
+        let n = a.n();
+        let mut l = vec![0.0; n * n];
+        for (i, row) in a.to_dense().into_iter().enumerate() {
+            l[i * n..(i + 1) * n].copy_from_slice(&row);
+        }
+        let dmax = a.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+        for j in 0..n {
+            let mut d = l[j * n + j];
+            for k in 0..j {
+                d -= l[j * n + k] * l[j * n + k];
+            }
+            if d <= 1e-13 * dmax || !d.is_finite() {
+                return Err(Error::NotPositiveDefinite {
+                    level,
+                    index: j,
+                    pivot: d,
+                });
+            }
+            let d = d.sqrt();
+            l[j * n + j] = d;
+            for i in j + 1..n {
+                let mut s = l[i * n + j];
+                for k in 0..j {
+                    s -= l[i * n + k] * l[j * n + k];
+                }
+                l[i * n + j] = s / d;
+            }
+        }
+        Ok(Self { n, l })
+    }
+
+    fn solve(&self, b: &[V3], x: &mut [V3]) {
+        let n = self.n;
+        let l = &self.l;
+        for i in 0..n {
+            let mut s = b[i];
+            for k in 0..i {
+                for d in 0..3 {
+                    s[d] -= l[i * n + k] * x[k][d];
+                }
+            }
+            for d in 0..3 {
+                s[d] /= l[i * n + i];
+            }
+            x[i] = s;
+        }
+        for i in (0..n).rev() {
+            let mut s = x[i];
+            for k in i + 1..n {
+                for d in 0..3 {
+                    s[d] -= l[k * n + i] * x[k][d];
+                }
+            }
+            for d in 0..3 {
+                s[d] /= l[i * n + i];
+            }
+            x[i] = s;
+        }
+    }
+}

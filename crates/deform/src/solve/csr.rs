@@ -1,0 +1,396 @@
+//! Sparse matrices in compressed sparse row form.
+//!
+//! [`SymMatrix`] is the spring system's matrix: symmetric, diagonal stored apart, the
+//! off-diagonal entries of every row stored in full (both triangles) so that the
+//! matrix–vector product runs row by row in parallel with no write conflicts. One scalar
+//! matrix serves the three components: [`SymMatrix::mul`] multiplies a vector of 3-vectors in
+//! one pass over the matrix. [`Csr`] is a general rectangular matrix (multigrid transfer
+//! operators).
+
+use rayon::prelude::*;
+
+use super::vecops::{CHUNK, V3, ordered_sum};
+use crate::error::{Error, Result};
+
+/// A node graph: for node i, its neighbours are `adj[offsets[i]..offsets[i + 1]]`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Graph {
+    /// Row offsets, length n + 1.
+    pub offsets: Vec<usize>,
+    /// Neighbour indices (no self loops).
+    pub adj: Vec<u32>,
+}
+
+impl Graph {
+    /// Builds a symmetric graph from undirected edges (duplicates and self loops removed,
+    /// neighbours sorted).
+    pub fn from_edges(n: usize, edges: &[[u32; 2]]) -> Result<Self> {
+        let mut deg = vec![0usize; n];
+        for (k, &[a, b]) in edges.iter().enumerate() {
+            if a as usize >= n || b as usize >= n {
+                return Err(Error::BadGraph {
+                    reason: format!("edge {k} ({a}, {b}) refers to a node ≥ {n}"),
+                });
+            }
+            if a != b {
+                deg[a as usize] += 1;
+                deg[b as usize] += 1;
+            }
+        }
+        let mut offsets = vec![0usize; n + 1];
+        for i in 0..n {
+            offsets[i + 1] = offsets[i] + deg[i];
+        }
+        let mut fill = offsets.clone();
+        let mut adj = vec![0u32; offsets[n]];
+        for &[a, b] in edges {
+            if a != b {
+                adj[fill[a as usize]] = b;
+                fill[a as usize] += 1;
+                adj[fill[b as usize]] = a;
+                fill[b as usize] += 1;
+            }
+        }
+        // Sort and deduplicate each row, then compact.
+        let mut out_off = vec![0usize; n + 1];
+        let mut out = Vec::with_capacity(adj.len());
+        for i in 0..n {
+            let row = &mut adj[offsets[i]..offsets[i + 1]];
+            row.sort_unstable();
+            let mut last = u32::MAX;
+            for &j in row.iter() {
+                if j != last {
+                    out.push(j);
+                    last = j;
+                }
+            }
+            out_off[i + 1] = out.len();
+        }
+        Ok(Self {
+            offsets: out_off,
+            adj: out,
+        })
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// True for a graph without nodes.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Neighbours of node i.
+    pub fn neighbours(&self, i: usize) -> &[u32] {
+        &self.adj[self.offsets[i]..self.offsets[i + 1]]
+    }
+}
+
+/// Symmetric sparse matrix: diagonal apart, off-diagonal rows in full.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SymMatrix {
+    /// Diagonal entries a_ii.
+    pub diag: Vec<f64>,
+    /// Row offsets into `cols` / `vals`, length n + 1.
+    pub offsets: Vec<usize>,
+    /// Column indices of the off-diagonal entries.
+    pub cols: Vec<u32>,
+    /// Off-diagonal values a_ij, i ≠ j.
+    pub vals: Vec<f64>,
+}
+
+impl SymMatrix {
+    /// Checks the structure (lengths, index range, no diagonal in the off-diagonal part) and
+    /// symmetry of the pattern and values to `rel_tol` relative.
+    pub fn validate(&self, rel_tol: f64) -> Result<()> {
+        let n = self.diag.len();
+        if self.offsets.len() != n + 1
+            || self.offsets[n] != self.cols.len()
+            || self.cols.len() != self.vals.len()
+        {
+            return Err(Error::BadGraph {
+                reason: "inconsistent matrix array lengths".into(),
+            });
+        }
+        for i in 0..n {
+            for p in self.offsets[i]..self.offsets[i + 1] {
+                let j = self.cols[p] as usize;
+                if j >= n || j == i {
+                    return Err(Error::BadGraph {
+                        reason: format!("row {i}: bad column {j}"),
+                    });
+                }
+                let back = self.get(j, i);
+                let a = self.vals[p];
+                if (back - a).abs() > rel_tol * a.abs().max(back.abs()) {
+                    return Err(Error::BadGraph {
+                        reason: format!("not symmetric at ({i}, {j}): {a} vs {back}"),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Order of the matrix.
+    pub fn n(&self) -> usize {
+        self.diag.len()
+    }
+
+    /// Number of stored off-diagonal entries.
+    pub fn nnz_offdiag(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// Entry (i, j) (zero when not stored; linear search in the row).
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        if i == j {
+            return self.diag[i];
+        }
+        let r = self.offsets[i]..self.offsets[i + 1];
+        self.cols[r.clone()]
+            .iter()
+            .position(|&c| c as usize == j)
+            .map_or(0.0, |p| self.vals[r.start + p])
+    }
+
+    /// Bytes held by the matrix arrays.
+    pub fn bytes(&self) -> usize {
+        self.diag.len() * 8 + self.offsets.len() * 8 + self.cols.len() * 4 + self.vals.len() * 8
+    }
+
+    /// One row's product (a_ii x_i + Σ_j a_ij x_j) for the three components.
+    #[inline]
+    fn row_mul(&self, i: usize, x: &[V3]) -> V3 {
+        let d = self.diag[i];
+        let xi = x[i];
+        let mut s = [d * xi[0], d * xi[1], d * xi[2]];
+        let r = self.offsets[i]..self.offsets[i + 1];
+        for (&c, &a) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
+            let xj = x[c as usize];
+            s[0] += a * xj[0];
+            s[1] += a * xj[1];
+            s[2] += a * xj[2];
+        }
+        s
+    }
+
+    /// y ← A x for the three components in one pass over the matrix; rows in parallel,
+    /// each row computed by one thread in a fixed order (deterministic).
+    pub fn mul(&self, x: &[V3], y: &mut [V3]) {
+        assert_eq!(x.len(), self.n());
+        assert_eq!(y.len(), self.n());
+        y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
+            let r0 = c * CHUNK;
+            for (k, yi) in ys.iter_mut().enumerate() {
+                *yi = self.row_mul(r0 + k, x);
+            }
+        });
+    }
+
+    /// y ← A x and returns xᵀ A x (fused, deterministic chunked reduction).
+    pub fn mul_dot(&self, x: &[V3], y: &mut [V3]) -> f64 {
+        assert_eq!(x.len(), self.n());
+        assert_eq!(y.len(), self.n());
+        let parts: Vec<f64> = y
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(c, ys)| {
+                let r0 = c * CHUNK;
+                let mut s = 0.0;
+                for (k, yi) in ys.iter_mut().enumerate() {
+                    let i = r0 + k;
+                    let v = self.row_mul(i, x);
+                    *yi = v;
+                    s += v[0] * x[i][0] + v[1] * x[i][1] + v[2] * x[i][2];
+                }
+                s
+            })
+            .collect();
+        ordered_sum(parts)
+    }
+
+    /// r ← b − A x, returns |r|² (deterministic).
+    pub fn residual(&self, b: &[V3], x: &[V3], r: &mut [V3]) -> f64 {
+        let parts: Vec<f64> = r
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(c, rs)| {
+                let r0 = c * CHUNK;
+                let mut s = 0.0;
+                for (k, ri) in rs.iter_mut().enumerate() {
+                    let i = r0 + k;
+                    let v = self.row_mul(i, x);
+                    *ri = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
+                    s += ri[0] * ri[0] + ri[1] * ri[1] + ri[2] * ri[2];
+                }
+                s
+            })
+            .collect();
+        ordered_sum(parts)
+    }
+
+    /// The matrix with rows and columns renumbered: new index k is old index `perm[k]`.
+    pub fn permuted(&self, perm: &[u32]) -> Self {
+        let n = self.n();
+        assert_eq!(perm.len(), n);
+        let mut inv = vec![0u32; n];
+        for (k, &o) in perm.iter().enumerate() {
+            inv[o as usize] = k as u32;
+        }
+        let mut offsets = vec![0usize; n + 1];
+        for k in 0..n {
+            let o = perm[k] as usize;
+            offsets[k + 1] = offsets[k] + self.offsets[o + 1] - self.offsets[o];
+        }
+        let mut cols = vec![0u32; offsets[n]];
+        let mut vals = vec![0.0; offsets[n]];
+        let mut diag = vec![0.0; n];
+        for k in 0..n {
+            let o = perm[k] as usize;
+            diag[k] = self.diag[o];
+            let mut row: Vec<(u32, f64)> = (self.offsets[o]..self.offsets[o + 1])
+                .map(|p| (inv[self.cols[p] as usize], self.vals[p]))
+                .collect();
+            row.sort_by_key(|e| e.0);
+            for (q, (c, v)) in row.into_iter().enumerate() {
+                cols[offsets[k] + q] = c;
+                vals[offsets[k] + q] = v;
+            }
+        }
+        Self {
+            diag,
+            offsets,
+            cols,
+            vals,
+        }
+    }
+
+    /// Dense copy (tests and the coarsest multigrid level).
+    pub fn to_dense(&self) -> Vec<Vec<f64>> {
+        let n = self.n();
+        let mut d = vec![vec![0.0; n]; n];
+        for i in 0..n {
+            d[i][i] = self.diag[i];
+            for p in self.offsets[i]..self.offsets[i + 1] {
+                d[i][self.cols[p] as usize] += self.vals[p];
+            }
+        }
+        d
+    }
+}
+
+/// General sparse matrix in CSR (rectangular allowed; the diagonal is not special).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Csr {
+    /// Number of columns.
+    pub ncols: usize,
+    /// Row offsets, length rows + 1.
+    pub offsets: Vec<usize>,
+    /// Column indices, sorted within a row.
+    pub cols: Vec<u32>,
+    /// Values.
+    pub vals: Vec<f64>,
+}
+
+impl Csr {
+    /// Number of rows.
+    pub fn nrows(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// Builds the matrix from rows computed independently in parallel (deterministic: each
+    /// row by one task).
+    pub(crate) fn from_rows<F>(nrows: usize, ncols: usize, row: F) -> Self
+    where
+        F: Fn(usize, &mut Vec<(u32, f64)>) + Sync,
+    {
+        let blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..nrows.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|b| {
+                let lo = b * CHUNK;
+                let hi = (lo + CHUNK).min(nrows);
+                let mut lens = Vec::with_capacity(hi - lo);
+                let mut cols = Vec::new();
+                let mut vals = Vec::new();
+                let mut buf = Vec::new();
+                for i in lo..hi {
+                    buf.clear();
+                    row(i, &mut buf);
+                    lens.push(buf.len());
+                    for &(c, v) in &buf {
+                        cols.push(c);
+                        vals.push(v);
+                    }
+                }
+                (lens, cols, vals)
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(nrows + 1);
+        offsets.push(0);
+        let total: usize = blocks.iter().map(|b| b.1.len()).sum();
+        let mut cols = Vec::with_capacity(total);
+        let mut vals = Vec::with_capacity(total);
+        for (lens, c, v) in blocks {
+            for l in lens {
+                let last = *offsets.last().unwrap_or(&0);
+                offsets.push(last + l);
+            }
+            cols.extend_from_slice(&c);
+            vals.extend_from_slice(&v);
+        }
+        Self {
+            ncols,
+            offsets,
+            cols,
+            vals,
+        }
+    }
+
+    /// The transpose (sequential counting sort: deterministic).
+    pub fn transpose(&self) -> Self {
+        let nr = self.nrows();
+        let mut cnt = vec![0usize; self.ncols + 1];
+        for &c in &self.cols {
+            cnt[c as usize + 1] += 1;
+        }
+        for k in 0..self.ncols {
+            cnt[k + 1] += cnt[k];
+        }
+        let offsets = cnt.clone();
+        let mut fill = cnt;
+        let mut cols = vec![0u32; self.cols.len()];
+        let mut vals = vec![0.0; self.vals.len()];
+        for i in 0..nr {
+            for p in self.offsets[i]..self.offsets[i + 1] {
+                let c = self.cols[p] as usize;
+                cols[fill[c]] = i as u32;
+                vals[fill[c]] = self.vals[p];
+                fill[c] += 1;
+            }
+        }
+        Self {
+            ncols: nr,
+            offsets,
+            cols,
+            vals,
+        }
+    }
+}
+
+/// Sorts (column, value) pairs by column (stable) and sums duplicates in their order.
+pub(crate) fn merge_row(buf: &mut Vec<(u32, f64)>) {
+    buf.sort_by_key(|e| e.0);
+    let mut w = 0;
+    for r in 0..buf.len() {
+        if w > 0 && buf[w - 1].0 == buf[r].0 {
+            buf[w - 1].1 += buf[r].1;
+        } else {
+            buf[w] = buf[r];
+            w += 1;
+        }
+    }
+    buf.truncate(w);
+}

@@ -1,0 +1,358 @@
+//! Linear algebra of the spring system, independent of the grid: node graphs, the symmetric
+//! sparse matrix shared by the three components, deterministic parallel kernels,
+//! preconditioned conjugate gradients (Jacobi or smoothed-aggregation multigrid), the paper's
+//! point iteration (Eq. 22) and reverse Cuthill–McKee renumbering.
+
+pub mod amg;
+pub mod csr;
+pub mod order;
+pub mod pcg;
+pub mod vecops;
+
+pub use amg::{Amg, AmgInfo, AmgOptions};
+pub use csr::{Csr, Graph, SymMatrix};
+pub use order::reverse_cuthill_mckee;
+pub use pcg::{
+    Constraint, Constraints, Jacobi, Preconditioner, SolveOptions, SolveReport, pcg,
+    point_iteration,
+};
+pub use vecops::V3;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Spring matrix of a structured nx × ny × nz grid (spacings hx, hy, hz; 7-point stencil
+    /// plus the face diagonals of a tetrahedral split), K = 1/length², boundary nodes
+    /// prescribed (eliminated): returns the interior matrix and a right-hand side.
+    pub(crate) fn grid_system(nx: usize, ny: usize, nz: usize) -> (SymMatrix, Vec<V3>) {
+        let (hx, hy, hz) = (1.0, 0.7, 1.9);
+        let id = |i: usize, j: usize, k: usize| (k * ny + j) * nx + i;
+        let interior = |i: usize, j: usize, k: usize| {
+            i > 0 && j > 0 && k > 0 && i + 1 < nx && j + 1 < ny && k + 1 < nz
+        };
+        let mut num = vec![u32::MAX; nx * ny * nz];
+        let mut cnt = 0u32;
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    if interior(i, j, k) {
+                        num[id(i, j, k)] = cnt;
+                        cnt += 1;
+                    }
+                }
+            }
+        }
+        let n = cnt as usize;
+        let offs: [(i64, i64, i64); 18] = [
+            (1, 0, 0),
+            (-1, 0, 0),
+            (0, 1, 0),
+            (0, -1, 0),
+            (0, 0, 1),
+            (0, 0, -1),
+            (1, 1, 0),
+            (-1, -1, 0),
+            (1, 0, 1),
+            (-1, 0, -1),
+            (0, 1, 1),
+            (0, -1, -1),
+            (1, -1, 0),
+            (-1, 1, 0),
+            (1, 0, -1),
+            (-1, 0, 1),
+            (0, 1, -1),
+            (0, -1, 1),
+        ];
+        let mut diag = vec![0.0; n];
+        let mut offsets = vec![0usize];
+        let mut cols = Vec::new();
+        let mut vals = Vec::new();
+        let mut b = vec![[0.0; 3]; n];
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let r = num[id(i, j, k)];
+                    if r == u32::MAX {
+                        continue;
+                    }
+                    let mut row = Vec::new();
+                    for &(di, dj, dk) in offs.iter().take(12) {
+                        let (ii, jj, kk) = (i as i64 + di, j as i64 + dj, k as i64 + dk);
+                        let l2 = (di as f64 * hx).powi(2)
+                            + (dj as f64 * hy).powi(2)
+                            + (dk as f64 * hz).powi(2);
+                        let kij = 1.0 / l2;
+                        diag[r as usize] += kij;
+                        let c = num[id(ii as usize, jj as usize, kk as usize)];
+                        if c == u32::MAX {
+                            // Prescribed neighbour: its displacement goes to the right side.
+                            let x = ii as f64 * hx;
+                            let z = kk as f64 * hz;
+                            let d = [0.1 * (x * 0.3).sin(), 0.05 * z, -0.02 * x * z];
+                            for q in 0..3 {
+                                b[r as usize][q] += kij * d[q];
+                            }
+                        } else {
+                            row.push((c, -kij));
+                        }
+                    }
+                    row.sort_by_key(|e| e.0);
+                    for (c, v) in row {
+                        cols.push(c);
+                        vals.push(v);
+                    }
+                    offsets.push(cols.len());
+                }
+            }
+        }
+        (
+            SymMatrix {
+                diag,
+                offsets,
+                cols,
+                vals,
+            },
+            b,
+        )
+    }
+
+    fn dense_solve(a: &SymMatrix, b: &[V3]) -> Vec<V3> {
+        let n = a.n();
+        let mut m = a.to_dense();
+        let mut x: Vec<V3> = b.to_vec();
+        for c in 0..n {
+            let piv = m[c][c];
+            for r in c + 1..n {
+                let f = m[r][c] / piv;
+                if f != 0.0 {
+                    for k in c..n {
+                        m[r][k] -= f * m[c][k];
+                    }
+                    for q in 0..3 {
+                        x[r][q] -= f * x[c][q];
+                    }
+                }
+            }
+        }
+        for r in (0..n).rev() {
+            for q in 0..3 {
+                let mut s = x[r][q];
+                for k in r + 1..n {
+                    s -= m[r][k] * x[k][q];
+                }
+                x[r][q] = s / m[r][r];
+            }
+        }
+        x
+    }
+
+    fn flat(v: &[V3]) -> Vec<f64> {
+        v.iter().flat_map(|a| a.iter().copied()).collect()
+    }
+
+    #[test]
+    fn grid_matrix_is_symmetric() {
+        let (a, _) = grid_system(6, 5, 4);
+        a.validate(1e-15).unwrap();
+    }
+
+    #[test]
+    fn solvers_match_dense_solution() {
+        let (a, b) = grid_system(9, 8, 7);
+        let exact = dense_solve(&a, &b);
+        let opts = SolveOptions {
+            rel_tol: 1e-12,
+            max_iters: 10_000,
+        };
+        let cons = Constraints::default();
+        let mut x = vec![[0.0; 3]; a.n()];
+        let rep = pcg(&a, &b, &mut x, &Jacobi::new(&a), &cons, &opts);
+        assert!(rep.converged, "{rep:?}");
+        testkit::assert_close!(flat(&x), flat(&exact), rel = 1e-9, abs = 1e-11);
+        let amg = Amg::new(
+            &a,
+            &AmgOptions {
+                max_coarse: 20,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert!(amg.info().sizes.len() >= 2);
+        let mut y = vec![[0.0; 3]; a.n()];
+        let rep2 = pcg(&a, &b, &mut y, &amg, &cons, &opts);
+        assert!(rep2.converged, "{rep2:?}");
+        assert!(
+            rep2.iterations < rep.iterations,
+            "{} vs {}",
+            rep2.iterations,
+            rep.iterations
+        );
+        testkit::assert_close!(flat(&y), flat(&exact), rel = 1e-9, abs = 1e-11);
+        let mut z = vec![[0.0; 3]; a.n()];
+        let rep3 = point_iteration(
+            &a,
+            &b,
+            &mut z,
+            &cons,
+            1.0,
+            0.0,
+            &SolveOptions {
+                rel_tol: 1e-10,
+                max_iters: 50_000,
+            },
+        );
+        assert!(rep3.rel_residual <= 1e-10, "{rep3:?}");
+        testkit::assert_close!(flat(&z), flat(&exact), rel = 1e-7, abs = 1e-9);
+    }
+
+    #[test]
+    fn results_identical_for_any_thread_count() {
+        let (a, b) = grid_system(24, 20, 18);
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+                    let mut x = vec![[0.0; 3]; a.n()];
+                    let rep = pcg(
+                        &a,
+                        &b,
+                        &mut x,
+                        &amg,
+                        &Constraints::default(),
+                        &SolveOptions::default(),
+                    );
+                    (flat(&x), rep.iterations)
+                })
+        };
+        let (x1, i1) = run(1);
+        let (x3, i3) = run(3);
+        assert_eq!(i1, i3);
+        assert!(x1.iter().zip(&x3).all(|(p, q)| p.to_bits() == q.to_bits()));
+    }
+
+    #[test]
+    fn constrained_solution_stays_in_planes_and_matches_reduced_solve() {
+        // Constrain every unknown of the plane k = 1 to slide in the plane z = const, and check
+        // against the dense solve of the z component with those unknowns fixed at zero.
+        let (nx, ny, nz) = (8, 7, 6);
+        let (a, b) = grid_system(nx, ny, nz);
+        let m = (nx - 2) * (ny - 2);
+        let cons = Constraints {
+            items: (0..m as u32)
+                .map(|i| (i, Constraint::Plane([0.0, 0.0, 1.0])))
+                .collect(),
+        };
+        let mut x = vec![[0.0; 3]; a.n()];
+        let rep = pcg(
+            &a,
+            &b,
+            &mut x,
+            &Jacobi::new(&a),
+            &cons,
+            &SolveOptions {
+                rel_tol: 1e-12,
+                max_iters: 5000,
+            },
+        );
+        assert!(rep.converged, "{rep:?}");
+        for v in x.iter().take(m) {
+            assert_eq!(v[2], 0.0);
+        }
+        // x, y components are unconstrained: equal the dense solve.
+        let exact = dense_solve(&a, &b);
+        for i in 0..a.n() {
+            testkit::assert_close!(
+                [x[i][0], x[i][1]],
+                [exact[i][0], exact[i][1]],
+                rel = 1e-8,
+                abs = 1e-11
+            );
+        }
+        // z component: solve the reduced dense system.
+        let keep: Vec<usize> = (m..a.n()).collect();
+        let d = a.to_dense();
+        let nk = keep.len();
+        let red = SymMatrix {
+            diag: keep.iter().map(|&i| d[i][i]).collect(),
+            offsets: (0..=nk).map(|r| r * (nk - 1)).collect(),
+            cols: (0..nk)
+                .flat_map(|r| (0..nk).filter(move |&c| c != r).map(|c| c as u32))
+                .collect(),
+            vals: (0..nk)
+                .flat_map(|r| (0..nk).filter(move |&c| c != r).map(move |c| (r, c)))
+                .map(|(r, c)| d[keep[r]][keep[c]])
+                .collect(),
+        };
+        let bz: Vec<V3> = keep.iter().map(|&i| [b[i][2], 0.0, 0.0]).collect();
+        let xz = dense_solve(&red, &bz);
+        for (r, &i) in keep.iter().enumerate() {
+            testkit::assert_close!(x[i][2], xz[r][0], rel = 1e-8, abs = 1e-11);
+        }
+        // The multigrid preconditioner with the same constraints gives the same answer.
+        let amg = Amg::new(
+            &a,
+            &AmgOptions {
+                max_coarse: 30,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let mut y = vec![[0.0; 3]; a.n()];
+        let rep2 = pcg(
+            &a,
+            &b,
+            &mut y,
+            &amg,
+            &cons,
+            &SolveOptions {
+                rel_tol: 1e-12,
+                max_iters: 5000,
+            },
+        );
+        assert!(rep2.converged, "{rep2:?}");
+        testkit::assert_close!(flat(&y), flat(&x), rel = 1e-8, abs = 1e-11);
+    }
+
+    #[test]
+    fn permuted_system_gives_permuted_solution() {
+        let (a, b) = grid_system(10, 9, 8);
+        let n = a.n();
+        let g = Graph {
+            offsets: a.offsets.clone(),
+            adj: a.cols.clone(),
+        };
+        let perm = reverse_cuthill_mckee(&g);
+        let ap = a.permuted(&perm);
+        ap.validate(1e-15).unwrap();
+        let bp: Vec<V3> = perm.iter().map(|&o| b[o as usize]).collect();
+        let opts = SolveOptions {
+            rel_tol: 1e-12,
+            max_iters: 5000,
+        };
+        let mut x = vec![[0.0; 3]; n];
+        pcg(
+            &a,
+            &b,
+            &mut x,
+            &Jacobi::new(&a),
+            &Constraints::default(),
+            &opts,
+        );
+        let mut xp = vec![[0.0; 3]; n];
+        pcg(
+            &ap,
+            &bp,
+            &mut xp,
+            &Jacobi::new(&ap),
+            &Constraints::default(),
+            &opts,
+        );
+        for (k, &o) in perm.iter().enumerate() {
+            testkit::assert_close!(xp[k], x[o as usize], rel = 1e-9, abs = 1e-12);
+        }
+    }
+}

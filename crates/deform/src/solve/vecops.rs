@@ -1,0 +1,121 @@
+//! Deterministic parallel kernels on arrays of 3-vectors: dot products, norms and fused
+//! updates whose results are bit-identical for any number of threads.
+//!
+//! Every reduction splits the array into fixed-size chunks of [`CHUNK`] entries (independent
+//! of the thread count), sums each chunk sequentially, and adds the chunk sums in chunk order.
+
+use rayon::prelude::*;
+
+/// One node's three components (x, y, z).
+pub type V3 = [f64; 3];
+
+/// Chunk length of every parallel loop and reduction (fixed, so results do not depend on the
+/// number of threads).
+pub const CHUNK: usize = 4096;
+
+/// Adds chunk partial sums in chunk order.
+pub(crate) fn ordered_sum(parts: Vec<f64>) -> f64 {
+    parts.into_iter().fold(0.0, |a, b| a + b)
+}
+
+/// Σ_i a_i · b_i over all nodes and components.
+pub fn dot(a: &[V3], b: &[V3]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let parts: Vec<f64> = a
+        .par_chunks(CHUNK)
+        .zip(b.par_chunks(CHUNK))
+        .map(|(ca, cb)| {
+            let mut s = 0.0;
+            for (x, y) in ca.iter().zip(cb) {
+                s += x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+            }
+            s
+        })
+        .collect();
+    ordered_sum(parts)
+}
+
+/// Euclidean norm over all nodes and components.
+pub fn norm(a: &[V3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// Largest Euclidean length of one node's vector (max is order independent).
+pub fn max_len(a: &[V3]) -> f64 {
+    a.par_chunks(CHUNK)
+        .map(|c| {
+            c.iter()
+                .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+                .fold(0.0, f64::max)
+        })
+        .reduce(|| 0.0, f64::max)
+}
+
+/// y ← y + α x.
+pub fn axpy(alpha: f64, x: &[V3], y: &mut [V3]) {
+    y.par_chunks_mut(CHUNK)
+        .zip(x.par_chunks(CHUNK))
+        .for_each(|(cy, cx)| {
+            for (yi, xi) in cy.iter_mut().zip(cx) {
+                for k in 0..3 {
+                    yi[k] += alpha * xi[k];
+                }
+            }
+        });
+}
+
+/// p ← z + β p.
+pub fn xpby(z: &[V3], beta: f64, p: &mut [V3]) {
+    p.par_chunks_mut(CHUNK)
+        .zip(z.par_chunks(CHUNK))
+        .for_each(|(cp, cz)| {
+            for (pi, zi) in cp.iter_mut().zip(cz) {
+                for k in 0..3 {
+                    pi[k] = zi[k] + beta * pi[k];
+                }
+            }
+        });
+}
+
+/// Sets every entry to zero.
+pub fn fill_zero(a: &mut [V3]) {
+    a.par_chunks_mut(CHUNK).for_each(|c| c.fill([0.0; 3]));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dot_is_thread_count_independent() {
+        let n = 50_000;
+        let a: Vec<V3> = (0..n)
+            .map(|i| {
+                let t = i as f64;
+                [(t * 0.37).sin(), (t * 1.1).cos() * 1e3, 1.0 / (1.0 + t)]
+            })
+            .collect();
+        let b: Vec<V3> = a.iter().map(|v| [v[2], v[0], v[1] * 1e-3]).collect();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| dot(&a, &b));
+        let three = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap()
+            .install(|| dot(&a, &b));
+        assert_eq!(one.to_bits(), three.to_bits());
+        // Same as a sequential chunked sum.
+        let mut total = 0.0;
+        for (ca, cb) in a.chunks(CHUNK).zip(b.chunks(CHUNK)) {
+            let mut s = 0.0;
+            for (x, y) in ca.iter().zip(cb) {
+                s += x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+            }
+            total += s;
+        }
+        assert_eq!(one.to_bits(), total.to_bits());
+    }
+}

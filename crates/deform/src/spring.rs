@@ -1,0 +1,920 @@
+//! The spring analogy (paper §4.1–4.2, Eqs. 14–26) on unstructured grids, with the boundary
+//! conditions of [`crate::bc`], an incremental quality guard and a report.
+//!
+//! For the unknown nodes i (interior and sliding), Eq. 21 in the deviations Δx:
+//! Σ_j K_ij (Δx_j − Δx_i) = Σ_j K_ij (R_ij − I)(x⁰_j − x⁰_i), with the prescribed Δx_j of
+//! moving and fixed nodes moved to the right-hand side: A Δx = b with a_ii = Σ_j K_ij,
+//! a_ij = −K_ij (one scalar matrix, three components). Sliding nodes are constrained to their
+//! plane (or seam line) and the system is solved by projected conjugate gradients, which is
+//! the exact constrained minimum of the spring energy (Eq. 18) — no outer iteration is needed
+//! for planes.
+//!
+//! R (Eqs. 25–26): per moving skin element (see [`crate::rotation`]), averaged to skin nodes
+//! as unit quaternions (area-weighted sum, normalised), propagated by Eq. 26 solved for the
+//! four quaternion components with the skin values and R = I on fixed nodes held, starting from
+//! R = I; each node's result is normalised (the projection of the average to the nearest
+//! rotation), and R_ij is the normalised sum of the two end nodes' quaternions — the geodesic
+//! midpoint of R_i and R_j, a proper rotation, at the cost of a few flops per edge instead of
+//! an SVD per edge.
+
+use std::time::Instant;
+
+use mesh::{Adjacency, ElementKind, Mesh};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::bc::{BoundaryConditions, Classified, NodeRole, PlaneInfo, classify};
+use crate::error::{Error, Result};
+use crate::rotation::element_rotation;
+use crate::solve::vecops::{CHUNK, V3, max_len};
+use crate::solve::{
+    Amg, AmgInfo, AmgOptions, Constraints, Graph, Jacobi, SolveOptions, SolveReport, SymMatrix,
+    pcg, point_iteration, reverse_cuthill_mckee,
+};
+
+/// Spring stiffness K_ij of the edge ij (lengths and volumes of the grid at the start of the
+/// increment).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Stiffness {
+    /// K = 1 / l.
+    InverseLength,
+    /// K = 1 / l².
+    InverseLengthSquared,
+    /// K = (1 / l²) · (V̄ / V_ij): V_ij the smaller of the end nodes' mean adjacent cell volumes,
+    /// V̄ the mean cell volume; stiffens the small cells near walls.
+    Volume,
+}
+
+/// The linear solver.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum SolverKind {
+    /// Conjugate gradients with the smoothed-aggregation multigrid V-cycle.
+    PcgMultigrid,
+    /// Conjugate gradients with the Jacobi preconditioner.
+    PcgJacobi,
+    /// The paper's point iteration (Eq. 22), Jacobi form.
+    PointIteration,
+}
+
+/// Options of [`deform`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DeformOptions {
+    /// Spring stiffness.
+    pub stiffness: Stiffness,
+    /// Use the adaptation matrices R (Eqs. 18–26); `false` gives the plain spring system.
+    pub adapt_rotation: bool,
+    /// Linear solver.
+    pub solver: SolverKind,
+    /// Relative residual |b − A Δx| / |b| at which a solve stops.
+    pub rel_tol: f64,
+    /// Iteration limit of one solve.
+    pub max_iters: usize,
+    /// The point iteration also stops when the largest node update (Eq. 24) is below this
+    /// fraction of the largest boundary displacement of the increment.
+    pub step_rel_tol: f64,
+    /// Quality guard: the motion is split into increments when a cell has q ≤ 0 or when the
+    /// minimum quality falls below this fraction of the initial minimum.
+    pub min_quality_ratio: f64,
+    /// Largest number of increments tried (1, 2, 4, … up to this).
+    pub max_increments: usize,
+    /// Return an inverted grid instead of an error (the report says so).
+    pub allow_inverted: bool,
+    /// Planarity tolerance of sliding markers, relative to the bounding-box diagonal.
+    pub plane_rel_tol: f64,
+    /// Renumber the unknowns by reverse Cuthill–McKee (internal only).
+    pub renumber: bool,
+}
+
+impl Default for DeformOptions {
+    fn default() -> Self {
+        Self {
+            stiffness: Stiffness::InverseLengthSquared,
+            adapt_rotation: true,
+            solver: SolverKind::PcgMultigrid,
+            rel_tol: 1e-8,
+            max_iters: 20_000,
+            step_rel_tol: 1e-10,
+            min_quality_ratio: 0.2,
+            max_increments: 16,
+            allow_inverted: false,
+            plane_rel_tol: 1e-6,
+            renumber: true,
+        }
+    }
+}
+
+/// Seconds per phase.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct PhaseTimes {
+    /// Node classification, adjacency, renumbering.
+    pub setup: f64,
+    /// Matrix and right-hand side assembly (all increments).
+    pub assemble: f64,
+    /// Preconditioner setup (multigrid hierarchy).
+    pub precond: f64,
+    /// R on the skin and its propagation (Eq. 26).
+    pub rotation: f64,
+    /// Linear solves of Eq. 21.
+    pub solve: f64,
+    /// Quality checks.
+    pub quality: f64,
+}
+
+/// Quality summary (DESIGN.md measure).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct QualitySummary {
+    /// Smallest value.
+    pub min: f64,
+    /// Mean value.
+    pub mean: f64,
+    /// 1st percentile.
+    pub p1: f64,
+    /// Cells with q ≤ 0.
+    pub inverted: usize,
+    /// Cells measured (tetrahedra, triangles).
+    pub measured: usize,
+}
+
+impl QualitySummary {
+    /// Summary of a quality field (NaN entries ignored).
+    pub fn of(q: &[f64]) -> Self {
+        let s = mesh::quality::summary(q);
+        Self {
+            min: s.min,
+            mean: s.mean,
+            p1: s.p1,
+            inverted: s.n_nonpositive,
+            measured: s.measured,
+        }
+    }
+}
+
+/// What [`deform`] did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DeformReport {
+    /// Nodes of the grid.
+    pub nodes: usize,
+    /// Cells of the grid.
+    pub cells: usize,
+    /// Unknown nodes (interior + sliding).
+    pub unknowns: usize,
+    /// Sliding nodes (constrained to a plane or a seam line).
+    pub sliding: usize,
+    /// Nodes with prescribed motion (moving markers and displacements).
+    pub moving: usize,
+    /// Planes fitted to sliding markers.
+    pub planes: Vec<PlaneInfo>,
+    /// Increments used (1 unless the guard split the motion).
+    pub increments: usize,
+    /// Attempts made by the guard (increments tried, in order).
+    pub attempts: Vec<usize>,
+    /// Iterations of the Eq. 21 solves, summed over the increments of the last attempt.
+    pub iterations: usize,
+    /// Iterations of the Eq. 26 (R) solves, summed.
+    pub rotation_iterations: usize,
+    /// Largest final relative residual of the Eq. 21 solves.
+    pub residual: f64,
+    /// Solver used.
+    pub solver: SolverKind,
+    /// Multigrid hierarchy of the last increment (when used).
+    pub multigrid: Option<AmgInfo>,
+    /// Quality before.
+    pub quality_before: QualitySummary,
+    /// Quality after.
+    pub quality_after: QualitySummary,
+    /// Seconds per phase (all attempts).
+    pub seconds: PhaseTimes,
+    /// Messages of the guard (increments, inverted cells allowed).
+    pub notes: Vec<String>,
+}
+
+/// The deformed coordinates (same numbering as the input) and the report.
+#[derive(Debug, Clone)]
+pub struct Deformed {
+    /// New node coordinates.
+    pub coords: Vec<[f64; 3]>,
+    /// What was done.
+    pub report: DeformReport,
+}
+
+/// Signed quality of every cell (canonical order; NaN for kinds without a measure) for the
+/// grid's connectivity at coordinates `x`.
+pub fn cell_quality(mesh: &Mesh, x: &[[f64; 3]]) -> Vec<f64> {
+    let signed = mesh.dim == 2;
+    let mut out = Vec::with_capacity(mesh.cells.len());
+    for g in mesh.cells.groups() {
+        let nn = g.kind.n_nodes();
+        let part: Vec<f64> = g
+            .nodes
+            .par_chunks(nn * 1024)
+            .flat_map_iter(|c| {
+                c.chunks_exact(nn).map(|e| match g.kind {
+                    ElementKind::Tetra => mesh::quality::tet_quality([
+                        x[e[0] as usize],
+                        x[e[1] as usize],
+                        x[e[2] as usize],
+                        x[e[3] as usize],
+                    ]),
+                    ElementKind::Triangle => mesh::quality::triangle_quality(
+                        [x[e[0] as usize], x[e[1] as usize], x[e[2] as usize]],
+                        signed,
+                    ),
+                    _ => f64::NAN,
+                })
+            })
+            .collect();
+        out.extend(part);
+    }
+    out
+}
+
+/// The `k` worst cells as "id (q = …)".
+fn worst_cells(q: &[f64], k: usize) -> String {
+    let mut idx: Vec<usize> = (0..q.len()).filter(|&i| !q[i].is_nan()).collect();
+    idx.sort_by(|&a, &b| q[a].total_cmp(&q[b]).then(a.cmp(&b)));
+    idx.iter()
+        .take(k)
+        .map(|&i| format!("cell {i} (q = {:.3e})", q[i]))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Unknown numbering and the solver's view of the grid.
+struct System {
+    /// Unknown index of each node (u32::MAX for prescribed nodes).
+    unk_of: Vec<u32>,
+    /// Node of each unknown, in solver order.
+    node_of: Vec<u32>,
+    cons: Constraints,
+}
+
+fn build_system(cls: &Classified, adj: &Adjacency, renumber: bool) -> System {
+    let n = cls.roles.len();
+    let is_unk = |r: &NodeRole| matches!(r, NodeRole::Free | NodeRole::Sliding(_));
+    let mut local = vec![u32::MAX; n];
+    let mut nodes: Vec<u32> = Vec::new();
+    for (i, r) in cls.roles.iter().enumerate() {
+        // A node without edges (unused by the cells) cannot move: it is left where it is.
+        if is_unk(r) && !adj.neighbours(i).is_empty() {
+            local[i] = nodes.len() as u32;
+            nodes.push(i as u32);
+        }
+    }
+    let node_of = if renumber && !nodes.is_empty() {
+        let mut offsets = Vec::with_capacity(nodes.len() + 1);
+        offsets.push(0);
+        let mut g = Vec::new();
+        for &i in &nodes {
+            g.extend(
+                adj.neighbours(i as usize)
+                    .iter()
+                    .map(|&j| local[j as usize])
+                    .filter(|&l| l != u32::MAX),
+            );
+            offsets.push(g.len());
+        }
+        let perm = reverse_cuthill_mckee(&Graph { offsets, adj: g });
+        perm.iter().map(|&l| nodes[l as usize]).collect()
+    } else {
+        nodes
+    };
+    let mut unk_of = vec![u32::MAX; n];
+    for (k, &i) in node_of.iter().enumerate() {
+        unk_of[i as usize] = k as u32;
+    }
+    let mut items = Vec::new();
+    for (k, &i) in node_of.iter().enumerate() {
+        if let NodeRole::Sliding(c) = cls.roles[i as usize] {
+            items.push((k as u32, c));
+        }
+    }
+    System {
+        unk_of,
+        node_of,
+        cons: Constraints { items },
+    }
+}
+
+/// Spring stiffness evaluator on a grid state.
+struct Springs<'a> {
+    x: &'a [[f64; 3]],
+    kind: Stiffness,
+    /// For [`Stiffness::Volume`]: V̄ / V_node per node.
+    vol_factor: Vec<f64>,
+}
+
+impl Springs<'_> {
+    #[inline]
+    fn k(&self, i: usize, j: usize) -> f64 {
+        let (a, b) = (self.x[i], self.x[j]);
+        let l2 = (b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2);
+        match self.kind {
+            Stiffness::InverseLength => 1.0 / l2.sqrt(),
+            Stiffness::InverseLengthSquared => 1.0 / l2,
+            Stiffness::Volume => self.vol_factor[i].max(self.vol_factor[j]) / l2,
+        }
+    }
+}
+
+fn springs<'a>(mesh: &Mesh, x: &'a [[f64; 3]], kind: Stiffness) -> Springs<'a> {
+    let mut vol_factor = Vec::new();
+    if kind == Stiffness::Volume {
+        let n = x.len();
+        let mut sum = vec![0.0; n];
+        let mut cnt = vec![0u32; n];
+        let mut total = 0.0;
+        let mut ncell = 0usize;
+        for t in mesh.tets() {
+            let v = mesh::quality::tet_volume([
+                x[t[0] as usize],
+                x[t[1] as usize],
+                x[t[2] as usize],
+                x[t[3] as usize],
+            ])
+            .abs();
+            total += v;
+            ncell += 1;
+            for &i in t {
+                sum[i as usize] += v;
+                cnt[i as usize] += 1;
+            }
+        }
+        for t in mesh.triangles() {
+            let p = |i: u32| Vector3::from(x[i as usize]);
+            let v = 0.5 * (p(t[1]) - p(t[0])).cross(&(p(t[2]) - p(t[0]))).norm();
+            total += v;
+            ncell += 1;
+            for &i in t {
+                sum[i as usize] += v;
+                cnt[i as usize] += 1;
+            }
+        }
+        let mean = if ncell > 0 { total / ncell as f64 } else { 1.0 };
+        vol_factor = (0..n)
+            .map(|i| {
+                if cnt[i] > 0 && sum[i] > 0.0 {
+                    mean / (sum[i] / cnt[i] as f64)
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+    }
+    Springs {
+        x,
+        kind,
+        vol_factor,
+    }
+}
+
+/// A = spring matrix on the unknowns (rows in solver order, parallel, deterministic).
+fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> SymMatrix {
+    let nu = sys.node_of.len();
+    let rows: Vec<(f64, Vec<(u32, f64)>)> = (0..nu)
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|k| {
+            let i = sys.node_of[k] as usize;
+            let mut d = 0.0;
+            let mut row = Vec::with_capacity(adj.neighbours(i).len());
+            for &j in adj.neighbours(i) {
+                let kij = sp.k(i, j as usize);
+                d += kij;
+                let u = sys.unk_of[j as usize];
+                if u != u32::MAX {
+                    row.push((u, -kij));
+                }
+            }
+            row.sort_by_key(|e| e.0);
+            (d, row)
+        })
+        .collect();
+    let mut diag = Vec::with_capacity(nu);
+    let mut offsets = Vec::with_capacity(nu + 1);
+    offsets.push(0);
+    let nnz: usize = rows.iter().map(|r| r.1.len()).sum();
+    let mut cols = Vec::with_capacity(nnz);
+    let mut vals = Vec::with_capacity(nnz);
+    for (d, row) in rows {
+        diag.push(d);
+        for (c, v) in row {
+            cols.push(c);
+            vals.push(v);
+        }
+        offsets.push(cols.len());
+    }
+    SymMatrix {
+        diag,
+        offsets,
+        cols,
+        vals,
+    }
+}
+
+/// b_k = Σ_{j prescribed} K_ij v_j (+ `extra(i)`), for a per-node field v.
+fn rhs<F>(sys: &System, adj: &Adjacency, sp: &Springs, v: &[V3], extra: F) -> Vec<V3>
+where
+    F: Fn(usize) -> V3 + Sync,
+{
+    (0..sys.node_of.len())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|k| {
+            let i = sys.node_of[k] as usize;
+            let mut s = extra(i);
+            for &j in adj.neighbours(i) {
+                if sys.unk_of[j as usize] == u32::MAX {
+                    let kij = sp.k(i, j as usize);
+                    let vj = v[j as usize];
+                    for q in 0..3 {
+                        s[q] += kij * vj[q];
+                    }
+                }
+            }
+            s
+        })
+        .collect()
+}
+
+/// (R − I) d for the rotation of the unit quaternion (u, w): 2w (u×d) + 2 u×(u×d).
+#[inline]
+fn rot_minus_id(u: [f64; 3], w: f64, d: [f64; 3]) -> V3 {
+    let c = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let ud = c(u, d);
+    let uud = c(u, ud);
+    [
+        2.0 * (w * ud[0] + uud[0]),
+        2.0 * (w * ud[1] + uud[1]),
+        2.0 * (w * ud[2] + uud[2]),
+    ]
+}
+
+/// Runs one linear solve with the chosen solver (preconditioner given for PCG).
+fn solve_one(
+    a: &SymMatrix,
+    b: &[V3],
+    x: &mut [V3],
+    cons: &Constraints,
+    pre: &Pre,
+    opts: &DeformOptions,
+    step_len: f64,
+) -> SolveReport {
+    let so = SolveOptions {
+        rel_tol: opts.rel_tol,
+        max_iters: opts.max_iters,
+    };
+    match pre {
+        Pre::Amg(m) => pcg(a, b, x, m, cons, &so),
+        Pre::Jacobi(m) => pcg(a, b, x, m, cons, &so),
+        Pre::None => point_iteration(a, b, x, cons, 1.0, opts.step_rel_tol * step_len, &so),
+    }
+}
+
+enum Pre<'a> {
+    Amg(Amg<'a>),
+    Jacobi(Jacobi),
+    None,
+}
+
+struct StepOut {
+    iterations: usize,
+    rot_iterations: usize,
+    residual: f64,
+    amg: Option<AmgInfo>,
+}
+
+/// One increment: moves `cur` from the state of fraction `s0` to the prescribed state `s1`.
+#[allow(clippy::too_many_arguments)]
+fn step(
+    mesh: &Mesh,
+    cls: &Classified,
+    bc: &BoundaryConditions,
+    sys: &System,
+    adj: &Adjacency,
+    cur: &mut [[f64; 3]],
+    s: f64,
+    opts: &DeformOptions,
+    times: &mut PhaseTimes,
+) -> Result<StepOut> {
+    let x0 = &mesh.coords;
+    let n = cur.len();
+    // Prescribed targets and displacements of this increment.
+    let mut disp: Vec<V3> = vec![[0.0; 3]; n];
+    let mut target: Vec<[f64; 3]> = cur.to_vec();
+    let mut max_disp = 0.0f64;
+    for i in 0..n {
+        let t = match cls.roles[i] {
+            NodeRole::Rigid(m) => cls.motions[m].apply(x0[i], s),
+            NodeRole::Displaced(k) => {
+                let d = bc.displacements[k].1;
+                if s == 1.0 {
+                    [x0[i][0] + d[0], x0[i][1] + d[1], x0[i][2] + d[2]]
+                } else {
+                    [
+                        x0[i][0] + s * d[0],
+                        x0[i][1] + s * d[1],
+                        x0[i][2] + s * d[2],
+                    ]
+                }
+            }
+            _ => continue,
+        };
+        target[i] = t;
+        disp[i] = [t[0] - cur[i][0], t[1] - cur[i][1], t[2] - cur[i][2]];
+        max_disp =
+            max_disp.max((disp[i][0].powi(2) + disp[i][1].powi(2) + disp[i][2].powi(2)).sqrt());
+    }
+    let mut out = StepOut {
+        iterations: 0,
+        rot_iterations: 0,
+        residual: 0.0,
+        amg: None,
+    };
+    if max_disp == 0.0 {
+        // Nothing moves: the grid is unchanged, bit for bit.
+        return Ok(out);
+    }
+    if sys.node_of.is_empty() {
+        // Every node is prescribed: nothing to solve.
+        cur.copy_from_slice(&target);
+        return Ok(out);
+    }
+    let t = Instant::now();
+    let sp = springs(mesh, cur, opts.stiffness);
+    let a = assemble(sys, adj, &sp);
+    times.assemble += t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let pre = match opts.solver {
+        SolverKind::PcgMultigrid => Pre::Amg(Amg::new(&a, &AmgOptions::default())?),
+        SolverKind::PcgJacobi => Pre::Jacobi(Jacobi::new(&a)),
+        SolverKind::PointIteration => Pre::None,
+    };
+    if let Pre::Amg(m) = &pre {
+        out.amg = Some(m.info());
+    }
+    times.precond += t.elapsed().as_secs_f64();
+
+    // R: unit quaternions per node (vector part, scalar part); identity by default.
+    let t = Instant::now();
+    let mut qv: Vec<V3> = vec![[0.0; 3]; n];
+    let mut qw: Vec<V3> = vec![[1.0, 0.0, 0.0]; n];
+    let mut any_rot = false;
+    if opts.adapt_rotation && !cls.skin.is_empty() {
+        let mut acc: Vec<[f64; 4]> = vec![[0.0; 4]; n];
+        let mut touched = vec![false; n];
+        for e in &cls.skin {
+            let p0: Vec<[f64; 3]> = e.iter().map(|&v| cur[v as usize]).collect();
+            let p1: Vec<[f64; 3]> = e.iter().map(|&v| target[v as usize]).collect();
+            let Some(r) = element_rotation(&p0, &p1) else {
+                continue;
+            };
+            let w = element_size(&p0);
+            let mut q = quat(&r);
+            if mesh.dim == 2 {
+                // Plane grids rotate about z only (drop the round-off of the SVD).
+                let l = (q[2] * q[2] + q[3] * q[3]).sqrt();
+                q = [0.0, 0.0, q[2] / l, q[3] / l];
+            }
+            for &v in e {
+                let a = &mut acc[v as usize];
+                for k in 0..4 {
+                    a[k] += w * q[k];
+                }
+                touched[v as usize] = true;
+            }
+        }
+        for i in 0..n {
+            if touched[i] {
+                let a = acc[i];
+                let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + a[3] * a[3]).sqrt();
+                if l > 0.0 && (a[0], a[1], a[2]) != (0.0, 0.0, 0.0) {
+                    qv[i] = [a[0] / l, a[1] / l, a[2] / l];
+                    qw[i] = [a[3] / l, 0.0, 0.0];
+                    any_rot = true;
+                }
+            }
+        }
+        if any_rot {
+            // Eq. 26 for the quaternion components, R = I as the start.
+            let bv = rhs(sys, adj, &sp, &qv, |_| [0.0; 3]);
+            let bw = rhs(sys, adj, &sp, &qw, |_| [0.0; 3]);
+            let nu = sys.node_of.len();
+            let mut xv = vec![[0.0; 3]; nu];
+            let mut xw = vec![[1.0, 0.0, 0.0]; nu];
+            let none = Constraints::default();
+            let rv = solve_one(&a, &bv, &mut xv, &none, &pre, opts, 1.0);
+            let rw = solve_one(&a, &bw, &mut xw, &none, &pre, opts, 1.0);
+            out.rot_iterations = rv.iterations + rw.iterations;
+            for (k, &i) in sys.node_of.iter().enumerate() {
+                let (v, w) = (xv[k], xw[k][0]);
+                let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + w * w).sqrt();
+                if l > 0.0 {
+                    qv[i as usize] = [v[0] / l, v[1] / l, v[2] / l];
+                    qw[i as usize] = [w / l, 0.0, 0.0];
+                }
+            }
+        }
+    }
+    times.rotation += t.elapsed().as_secs_f64();
+
+    // Eq. 21 right-hand side.
+    let t = Instant::now();
+    let cur_ro: &[[f64; 3]] = cur;
+    let b = rhs(sys, adj, &sp, &disp, |i| {
+        if !any_rot {
+            return [0.0; 3];
+        }
+        let mut s = [0.0; 3];
+        for &j in adj.neighbours(i) {
+            let j = j as usize;
+            let kij = sp.k(i, j);
+            let mut u = [
+                qv[i][0] + qv[j][0],
+                qv[i][1] + qv[j][1],
+                qv[i][2] + qv[j][2],
+            ];
+            let mut w = qw[i][0] + qw[j][0];
+            let l = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2] + w * w).sqrt();
+            if l == 0.0 {
+                continue;
+            }
+            for v in u.iter_mut() {
+                *v /= l;
+            }
+            w /= l;
+            let d = [
+                cur_ro[j][0] - cur_ro[i][0],
+                cur_ro[j][1] - cur_ro[i][1],
+                cur_ro[j][2] - cur_ro[i][2],
+            ];
+            let r = rot_minus_id(u, w, d);
+            for q in 0..3 {
+                s[q] -= kij * r[q];
+            }
+        }
+        s
+    });
+    let mut b = b;
+    if mesh.dim == 2 {
+        // Plane grids stay in their plane.
+        for v in b.iter_mut() {
+            v[2] = 0.0;
+        }
+    }
+    times.assemble += t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let nu = sys.node_of.len();
+    let mut dx = vec![[0.0; 3]; nu];
+    let rep = solve_one(&a, &b, &mut dx, &sys.cons, &pre, opts, max_disp);
+    times.solve += t.elapsed().as_secs_f64();
+    let ok = match opts.solver {
+        SolverKind::PointIteration => rep.iterations < opts.max_iters,
+        _ => rep.converged,
+    };
+    if !ok {
+        return Err(Error::NoConvergence {
+            what: "spring system (Eq. 21)".into(),
+            solver: rep.solver,
+            iterations: rep.iterations,
+            residual: rep.rel_residual,
+        });
+    }
+    out.iterations = rep.iterations;
+    out.residual = rep.rel_residual;
+    for (k, &i) in sys.node_of.iter().enumerate() {
+        let c = &mut cur[i as usize];
+        for q in 0..3 {
+            c[q] += dx[k][q];
+        }
+    }
+    for i in 0..n {
+        if matches!(cls.roles[i], NodeRole::Rigid(_) | NodeRole::Displaced(_)) {
+            cur[i] = target[i];
+        }
+    }
+    let _ = max_len(&dx);
+    Ok(out)
+}
+
+fn element_size(p: &[[f64; 3]]) -> f64 {
+    let v = |a: [f64; 3]| Vector3::from(a);
+    if p.len() >= 3 {
+        0.5 * (v(p[1]) - v(p[0])).cross(&(v(p[2]) - v(p[0]))).norm()
+    } else {
+        (v(p[1]) - v(p[0])).norm()
+    }
+}
+
+/// Unit quaternion [x, y, z, w] of a rotation matrix, with w ≥ 0.
+fn quat(r: &Matrix3<f64>) -> [f64; 4] {
+    if *r == Matrix3::identity() {
+        return [0.0, 0.0, 0.0, 1.0];
+    }
+    let q = UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(*r));
+    let c = q.coords; // (i, j, k, w)
+    let s = if c[3] < 0.0 { -1.0 } else { 1.0 };
+    [s * c[0], s * c[1], s * c[2], s * c[3]]
+}
+
+/// Deforms the volume grid for the boundary conditions `bc` (Eqs. 14–26 and 34), with the
+/// quality guard; returns the new coordinates (input numbering) and a report.
+pub fn deform(mesh: &Mesh, bc: &BoundaryConditions, opts: &DeformOptions) -> Result<Deformed> {
+    deform_with_progress(mesh, bc, opts, &mut |_, _, _| {})
+}
+
+/// Morton (Z-order) numbering of the nodes from their coordinates, 21 bits per axis over the
+/// bounding box; returns `perm` with node `i` → new index `perm[i]` (ties by index, so the
+/// order is deterministic).
+pub fn spatial_order(coords: &[[f64; 3]]) -> Vec<u32> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in coords {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let spread = |v: u64| {
+        let mut x = v & 0x1f_ffff;
+        x = (x | (x << 32)) & 0x1f_0000_0000_ffff;
+        x = (x | (x << 16)) & 0x1f_0000_ff00_00ff;
+        x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
+        x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
+        x = (x | (x << 2)) & 0x1249_2492_4924_9249;
+        x
+    };
+    let mut keys: Vec<(u64, u32)> = coords
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let mut code = 0u64;
+            for k in 0..3 {
+                let w = hi[k] - lo[k];
+                let q = if w > 0.0 {
+                    ((p[k] - lo[k]) / w * 2_097_151.0) as u64
+                } else {
+                    0
+                };
+                code |= spread(q) << k;
+            }
+            (code, i as u32)
+        })
+        .collect();
+    keys.par_sort_unstable();
+    let mut perm = vec![0u32; coords.len()];
+    for (new, &(_, old)) in keys.iter().enumerate() {
+        perm[old as usize] = new as u32;
+    }
+    perm
+}
+
+/// [`deform`] calling `progress(phase, done, total)` as it goes.
+///
+/// With `opts.renumber`, the grid is first renumbered internally along a Morton curve (so a
+/// randomly numbered input runs about as fast as a well-ordered one) and the unknowns are
+/// then ordered by reverse Cuthill–McKee; the result is returned in the input numbering.
+pub fn deform_with_progress(
+    mesh: &Mesh,
+    bc: &BoundaryConditions,
+    opts: &DeformOptions,
+    progress: &mut dyn FnMut(&str, usize, usize),
+) -> Result<Deformed> {
+    if !opts.renumber || mesh.n_nodes() < 2 {
+        return deform_inner(mesh, bc, opts, progress);
+    }
+    // Validate in the user's numbering first, so that errors name the user's nodes.
+    classify(mesh, bc, opts.plane_rel_tol)?;
+    let t = Instant::now();
+    let perm = spatial_order(&mesh.coords);
+    let mut m2 = mesh.clone();
+    m2.renumber_nodes(&perm).map_err(|e| Error::BadGraph {
+        reason: e.to_string(),
+    })?;
+    let bc2 = BoundaryConditions {
+        markers: bc.markers.clone(),
+        displacements: bc
+            .displacements
+            .iter()
+            .map(|&(v, d)| (perm[v as usize], d))
+            .collect(),
+    };
+    let t_perm = t.elapsed().as_secs_f64();
+    let mut d = deform_inner(&m2, &bc2, opts, progress)?;
+    d.coords = perm.iter().map(|&p| d.coords[p as usize]).collect();
+    d.report.seconds.setup += t_perm;
+    Ok(d)
+}
+
+fn deform_inner(
+    mesh: &Mesh,
+    bc: &BoundaryConditions,
+    opts: &DeformOptions,
+    progress: &mut dyn FnMut(&str, usize, usize),
+) -> Result<Deformed> {
+    let mut times = PhaseTimes::default();
+    let t = Instant::now();
+    progress("setup", 0, 1);
+    let cls = classify(mesh, bc, opts.plane_rel_tol)?;
+    let adj = Adjacency::build(mesh);
+    let sys = build_system(&cls, &adj, opts.renumber);
+    times.setup = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let q0 = cell_quality(mesh, &mesh.coords);
+    let before = QualitySummary::of(&q0);
+    times.quality += t.elapsed().as_secs_f64();
+    let mut attempts = Vec::new();
+    let mut notes = Vec::new();
+    let mut inc = 1usize;
+    loop {
+        attempts.push(inc);
+        let mut cur = mesh.coords.clone();
+        let mut iterations = 0;
+        let mut rot_iterations = 0;
+        let mut residual = 0.0f64;
+        let mut amg = None;
+        for m in 1..=inc {
+            progress("solve", m - 1, inc);
+            let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
+            let o = step(mesh, &cls, bc, &sys, &adj, &mut cur, s, opts, &mut times)?;
+            iterations += o.iterations;
+            rot_iterations += o.rot_iterations;
+            residual = residual.max(o.residual);
+            if o.amg.is_some() {
+                amg = o.amg;
+            }
+        }
+        progress("quality", inc, inc);
+        let t = Instant::now();
+        let q1 = cell_quality(mesh, &cur);
+        let after = QualitySummary::of(&q1);
+        times.quality += t.elapsed().as_secs_f64();
+        let low = after.min < opts.min_quality_ratio * before.min;
+        let bad = after.inverted > before.inverted || low;
+        if bad && inc < opts.max_increments {
+            notes.push(format!(
+                "{inc} increment(s): {} inverted cells, min quality {:.4} (initial {:.4}); retrying with {}",
+                after.inverted,
+                after.min,
+                before.min,
+                inc * 2
+            ));
+            inc *= 2;
+            continue;
+        }
+        if after.inverted > before.inverted {
+            let worst = worst_cells(&q1, 5);
+            if !opts.allow_inverted {
+                return Err(Error::Inverted {
+                    count: after.inverted,
+                    increments: inc,
+                    worst,
+                });
+            }
+            notes.push(format!(
+                "{} inverted cells kept (allowed); worst: {worst}",
+                after.inverted
+            ));
+        } else if low {
+            notes.push(format!(
+                "minimum quality {:.4} is below {} × initial {:.4} after {inc} increments",
+                after.min, opts.min_quality_ratio, before.min
+            ));
+        }
+        let nmov = cls
+            .roles
+            .iter()
+            .filter(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
+            .count();
+        let report = DeformReport {
+            nodes: mesh.n_nodes(),
+            cells: mesh.cells.len(),
+            unknowns: sys.node_of.len(),
+            sliding: sys.cons.items.len(),
+            moving: nmov,
+            planes: cls.planes.clone(),
+            increments: inc,
+            attempts,
+            iterations,
+            rotation_iterations: rot_iterations,
+            residual,
+            solver: opts.solver,
+            multigrid: amg,
+            quality_before: before,
+            quality_after: after,
+            seconds: times,
+            notes,
+        };
+        return Ok(Deformed {
+            coords: cur,
+            report,
+        });
+    }
+}

@@ -1,0 +1,5 @@
+//! Integration tests of the `deform` public API.
+
+mod cases;
+mod identities;
+mod props;

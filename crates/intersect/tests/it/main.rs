@@ -1,0 +1,9 @@
+//! Integration tests of `intersect`'s public API on analytic shapes with exact answers.
+
+mod corner;
+mod fixture;
+mod model;
+mod project;
+mod props;
+mod shapes;
+mod ssi;

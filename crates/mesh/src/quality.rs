@@ -1,0 +1,346 @@
+//! Element quality (DESIGN.md): the signed mean ratio of tetrahedra and triangles, minimum
+//! dihedral (or corner) angles, summaries and the comparison of two grids with the same
+//! connectivity.
+//!
+//! Tetrahedron, edges `l_1..l_6`, signed volume `V = (b-a)·((c-a)×(d-a))/6`:
+//! `q = sign(V) · 12 (3|V|)^(2/3) / Σ l_i²` — 1 for the regular tetrahedron, 0 when flat,
+//! negative when inverted. Triangle, area `A`: `q = 4√3 A / Σ l_i²`, signed by the
+//! orientation in 2D grids (`A` from the z component of `(b-a)×(c-a)`), unsigned in 3D.
+//! Other kinds (quads, pyramids, prisms, hexahedra) have no measure here: their entry is
+//! NaN and summaries count them as unmeasured.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::grid::{ElementKind, Elements, Mesh};
+
+type P = [f64; 3];
+
+fn sub(a: P, b: P) -> P {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: P, b: P) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: P, b: P) -> P {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Signed volume of the tetrahedron `abcd` (positive when `d` is on the side of the
+/// right-hand normal of `abc`).
+pub fn tet_volume(p: [P; 4]) -> f64 {
+    dot(sub(p[1], p[0]), cross(sub(p[2], p[0]), sub(p[3], p[0]))) / 6.0
+}
+
+/// Signed mean ratio of a tetrahedron: `sign(V) · 12 (3|V|)^(2/3) / Σ l²`.
+///
+/// ```
+/// let s = 1.0 / 2f64.sqrt();
+/// let regular = [[1.0, 0.0, -s], [0.0, 1.0, s], [-1.0, 0.0, -s], [0.0, -1.0, s]];
+/// testkit::assert_close!(mesh::quality::tet_quality(regular), 1.0, rel = 1e-14);
+/// let inverted = [regular[1], regular[0], regular[2], regular[3]];
+/// testkit::assert_close!(mesh::quality::tet_quality(inverted), -1.0, rel = 1e-14);
+/// ```
+pub fn tet_quality(p: [P; 4]) -> f64 {
+    let v = tet_volume(p);
+    let mut s = 0.0;
+    for e in ElementKind::Tetra.edges() {
+        let d = sub(p[e[1] as usize], p[e[0] as usize]);
+        s += dot(d, d);
+    }
+    if s == 0.0 {
+        return 0.0;
+    }
+    // Cube root of |V| and the sign applied afterwards (cbrt of a negative is negative, but
+    // squaring would lose the sign).
+    let c = (3.0 * v.abs()).cbrt();
+    v.signum() * 12.0 * c * c / s
+}
+
+/// Mean ratio of a triangle `4√3 A / Σ l²`; with `signed`, the sign of the z component of
+/// `(b-a)×(c-a)` (2D grids).
+pub fn triangle_quality(p: [P; 3], signed: bool) -> f64 {
+    let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+    let area = if signed {
+        0.5 * n[2]
+    } else {
+        0.5 * dot(n, n).sqrt()
+    };
+    let mut s = 0.0;
+    for e in ElementKind::Triangle.edges() {
+        let d = sub(p[e[1] as usize], p[e[0] as usize]);
+        s += dot(d, d);
+    }
+    if s == 0.0 {
+        return 0.0;
+    }
+    4.0 * 3f64.sqrt() * area / s
+}
+
+/// Angle at `a` between `b - a` and `c - a`, in radians.
+fn angle(a: P, b: P, c: P) -> f64 {
+    let (u, v) = (sub(b, a), sub(c, a));
+    let n = dot(u, u).sqrt() * dot(v, v).sqrt();
+    if n == 0.0 {
+        return 0.0;
+    }
+    cross(u, v)
+        .iter()
+        .map(|x| x * x)
+        .sum::<f64>()
+        .sqrt()
+        .atan2(dot(u, v))
+}
+
+/// Smallest of the six dihedral angles of a tetrahedron, in degrees (70.53° for the regular
+/// one, 0 for a flat one).
+pub fn tet_min_dihedral(p: [P; 4]) -> f64 {
+    let mut best = f64::INFINITY;
+    for e in ElementKind::Tetra.edges() {
+        let (i, j) = (e[0] as usize, e[1] as usize);
+        let others: Vec<usize> = (0..4).filter(|&k| k != i && k != j).collect();
+        let axis = sub(p[j], p[i]);
+        let l2 = dot(axis, axis);
+        if l2 == 0.0 {
+            return 0.0;
+        }
+        let perp = |q: P| {
+            let d = sub(q, p[i]);
+            let t = dot(d, axis) / l2;
+            [d[0] - t * axis[0], d[1] - t * axis[1], d[2] - t * axis[2]]
+        };
+        let (u, w) = (perp(p[others[0]]), perp(p[others[1]]));
+        best = best.min(angle([0.0; 3], u, w));
+    }
+    best.to_degrees()
+}
+
+/// Smallest corner angle of a triangle, in degrees.
+pub fn triangle_min_angle(p: [P; 3]) -> f64 {
+    let a = angle(p[0], p[1], p[2]);
+    let b = angle(p[1], p[2], p[0]);
+    let c = angle(p[2], p[0], p[1]);
+    a.min(b).min(c).to_degrees()
+}
+
+fn per_element(
+    mesh: &Mesh,
+    set: &Elements,
+    f: impl Fn(ElementKind, &[u32]) -> f64 + Sync,
+) -> Vec<f64> {
+    let _ = mesh;
+    let mut out = Vec::with_capacity(set.len());
+    for g in set.groups() {
+        let n = g.kind.n_nodes();
+        let part: Vec<f64> = g.nodes.par_chunks_exact(n).map(|e| f(g.kind, e)).collect();
+        out.extend_from_slice(&part);
+    }
+    out
+}
+
+/// Signed mean ratio of every cell, in canonical element order (NaN for kinds without a
+/// measure). Node indices must be valid ([`Mesh::validate`]).
+pub fn cell_quality(mesh: &Mesh) -> Vec<f64> {
+    let x = &mesh.coords;
+    let signed = mesh.dim == 2;
+    per_element(mesh, &mesh.cells, |kind, e| match kind {
+        ElementKind::Tetra => tet_quality([
+            x[e[0] as usize],
+            x[e[1] as usize],
+            x[e[2] as usize],
+            x[e[3] as usize],
+        ]),
+        ElementKind::Triangle => triangle_quality(
+            [x[e[0] as usize], x[e[1] as usize], x[e[2] as usize]],
+            signed,
+        ),
+        _ => f64::NAN,
+    })
+}
+
+/// Minimum dihedral angle (tetrahedra) or corner angle (triangles) of every cell, in
+/// degrees, canonical order (NaN for other kinds).
+pub fn cell_min_angle(mesh: &Mesh) -> Vec<f64> {
+    let x = &mesh.coords;
+    per_element(mesh, &mesh.cells, |kind, e| match kind {
+        ElementKind::Tetra => tet_min_dihedral([
+            x[e[0] as usize],
+            x[e[1] as usize],
+            x[e[2] as usize],
+            x[e[3] as usize],
+        ]),
+        ElementKind::Triangle => {
+            triangle_min_angle([x[e[0] as usize], x[e[1] as usize], x[e[2] as usize]])
+        }
+        _ => f64::NAN,
+    })
+}
+
+/// Per node, the smallest quality of the cells that use it (NaN for unused nodes).
+pub fn node_quality(mesh: &Mesh, cell_q: &[f64]) -> Vec<f64> {
+    let mut out = vec![f64::NAN; mesh.n_nodes()];
+    let mut e = 0;
+    for g in mesh.cells.groups() {
+        for nodes in g.iter() {
+            let q = cell_q[e];
+            for &v in nodes {
+                let o = &mut out[v as usize];
+                if o.is_nan() || q < *o {
+                    *o = q;
+                }
+            }
+            e += 1;
+        }
+    }
+    out
+}
+
+/// Summary statistics of a quality field.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Summary {
+    /// Number of values.
+    pub count: usize,
+    /// Number of measured (non-NaN) values.
+    pub measured: usize,
+    /// Smallest value.
+    pub min: f64,
+    /// Mean value.
+    pub mean: f64,
+    /// 1st percentile (nearest rank).
+    pub p1: f64,
+    /// Largest value.
+    pub max: f64,
+    /// Number of values ≤ 0 (flat or inverted elements).
+    pub n_nonpositive: usize,
+}
+
+/// Summarises a quality field, ignoring NaN entries (deterministic: sequential sum).
+///
+/// ```
+/// let s = mesh::quality::summary(&[1.0, 0.5, f64::NAN, -0.2]);
+/// assert_eq!((s.count, s.measured, s.n_nonpositive), (4, 3, 1));
+/// assert_eq!((s.min, s.max, s.p1), (-0.2, 1.0, -0.2));
+/// ```
+pub fn summary(q: &[f64]) -> Summary {
+    let mut v: Vec<f64> = q.iter().copied().filter(|x| !x.is_nan()).collect();
+    let measured = v.len();
+    if measured == 0 {
+        return Summary {
+            count: q.len(),
+            measured: 0,
+            min: f64::NAN,
+            mean: f64::NAN,
+            p1: f64::NAN,
+            max: f64::NAN,
+            n_nonpositive: 0,
+        };
+    }
+    let mean = v.iter().sum::<f64>() / measured as f64;
+    let n_nonpositive = v.iter().filter(|&&x| x <= 0.0).count();
+    v.sort_unstable_by(f64::total_cmp);
+    let rank = ((0.01 * measured as f64).ceil() as usize).max(1) - 1;
+    Summary {
+        count: q.len(),
+        measured,
+        min: v[0],
+        mean,
+        p1: v[rank],
+        max: v[measured - 1],
+        n_nonpositive,
+    }
+}
+
+/// One of the worst elements of a comparison.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct WorstElement {
+    /// Element id (canonical order of the cells).
+    pub id: usize,
+    /// Element kind.
+    pub kind: ElementKind,
+    /// Quality in the first grid.
+    pub before: f64,
+    /// Quality in the second grid.
+    pub after: f64,
+    /// `after / before`.
+    pub ratio: f64,
+    /// Centroid in the second grid.
+    pub centroid: [f64; 3],
+}
+
+/// Comparison of two grids with the same connectivity (e.g. before and after deformation).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Comparison {
+    /// Summary of the first grid's cell quality.
+    pub before: Summary,
+    /// Summary of the second grid's cell quality.
+    pub after: Summary,
+    /// Per cell, `after / before` (NaN where unmeasured).
+    pub ratio: Vec<f64>,
+    /// Summary of the ratios.
+    pub ratio_summary: Summary,
+    /// The cells with the lowest quality in the second grid, worst first (ties by id).
+    pub worst: Vec<WorstElement>,
+}
+
+/// Compares the cell quality of `b` with that of `a`; they must have the same number of
+/// nodes and the same cells. Reports the `n_worst` lowest-quality cells of `b`.
+pub fn compare(a: &Mesh, b: &Mesh, n_worst: usize) -> Result<Comparison> {
+    if a.n_nodes() != b.n_nodes() {
+        return Err(Error::Mismatch {
+            what: format!("{} nodes vs {}", a.n_nodes(), b.n_nodes()),
+        });
+    }
+    if a.cells.groups().len() != b.cells.groups().len()
+        || a.cells
+            .groups()
+            .iter()
+            .zip(b.cells.groups())
+            .any(|(g, h)| g.kind != h.kind || g.nodes != h.nodes)
+    {
+        return Err(Error::Mismatch {
+            what: "cell connectivity differs".into(),
+        });
+    }
+    let qa = cell_quality(a);
+    let qb = cell_quality(b);
+    let ratio: Vec<f64> = qa.iter().zip(&qb).map(|(x, y)| y / x).collect();
+    let mut order: Vec<usize> = (0..qb.len()).filter(|&i| !qb[i].is_nan()).collect();
+    order.sort_unstable_by(|&i, &j| qb[i].total_cmp(&qb[j]).then(i.cmp(&j)));
+    let kinds: Vec<(ElementKind, &[u32])> = b.cells.iter().collect();
+    let worst = order
+        .iter()
+        .take(n_worst)
+        .map(|&i| {
+            let (kind, nodes) = kinds[i];
+            let mut c = [0.0; 3];
+            for &v in nodes {
+                for k in 0..3 {
+                    c[k] += b.coords[v as usize][k];
+                }
+            }
+            for ck in &mut c {
+                *ck /= nodes.len() as f64;
+            }
+            WorstElement {
+                id: i,
+                kind,
+                before: qa[i],
+                after: qb[i],
+                ratio: ratio[i],
+                centroid: c,
+            }
+        })
+        .collect();
+    Ok(Comparison {
+        before: summary(&qa),
+        after: summary(&qb),
+        ratio_summary: summary(&ratio),
+        ratio,
+        worst,
+    })
+}

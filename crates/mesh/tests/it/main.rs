@@ -1,0 +1,10 @@
+//! Integration tests of the `mesh` crate's public API.
+
+mod adjacency;
+mod common;
+mod corrupt;
+mod msh;
+mod oracle;
+mod quality;
+mod su2;
+mod vtu;

@@ -1,0 +1,87 @@
+//! VTK XML unstructured grids: round trips through our reader, a hand-written ASCII file.
+
+use mesh::vtu::{VtuEncoding, VtuOptions};
+use mesh::{ElementKind, Error};
+
+use crate::common::{assert_same_grid, read_su2, shared_su2};
+
+#[test]
+fn vtu_round_trip_in_both_encodings() {
+    for name in ["mesh_brick_tets_ffd.su2", "mesh_NACA0012_inv.su2"] {
+        let a = read_su2(&shared_su2(name));
+        let disp = vec![[0.5, -0.25, 1e-300]; a.n_nodes()];
+        for enc in [VtuEncoding::AppendedRaw, VtuEncoding::Base64] {
+            let mut buf = Vec::new();
+            let opts = VtuOptions::default()
+                .with_encoding(enc)
+                .with_displacement(&disp);
+            mesh::vtu::write(&a, &opts, &mut buf).unwrap();
+            let b = mesh::vtu::read(&buf[..], "mem.vtu".as_ref()).unwrap();
+            assert_same_grid(&a, &b);
+            assert!(b.warnings.is_empty(), "{:?}", b.warnings);
+        }
+    }
+}
+
+#[test]
+fn displacement_of_the_wrong_length_is_refused() {
+    let m = mesh::generate::box_tets(1, 1, 1, [0.0; 3], [1.0; 3]);
+    let d = vec![[0.0; 3]; 3];
+    let opts = VtuOptions::default().with_displacement(&d);
+    let e = mesh::vtu::write(&m, &opts, &mut Vec::new()).unwrap_err();
+    assert!(e.to_string().contains("3 entries for 8 nodes"));
+}
+
+#[test]
+fn ascii_vtu_as_other_tools_write_it() {
+    let txt = r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="4" NumberOfCells="2">
+      <Points>
+        <DataArray type="Float32" NumberOfComponents="3" format="ascii">
+          0 0 0  1 0 0  0 1 0  0 0 1
+        </DataArray>
+      </Points>
+      <Cells>
+        <DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3 0 2 1</DataArray>
+        <DataArray type="Int32" Name="offsets" format="ascii">4 7</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">10 5</DataArray>
+      </Cells>
+    </Piece>
+  </UnstructuredGrid>
+</VTKFile>
+"#;
+    let m = mesh::vtu::read(txt.as_bytes(), "t.vtu".as_ref()).unwrap();
+    assert_eq!(m.tets(), &[[0, 1, 2, 3]]);
+    assert_eq!(m.coords[3], [0.0, 0.0, 1.0]);
+    assert_eq!(m.markers.len(), 1);
+    assert_eq!(m.markers[0].elements.count(ElementKind::Triangle), 1);
+    let bad = txt.replace("10 5", "10 42");
+    let e = mesh::vtu::read(bad.as_bytes(), "t.vtu".as_ref()).unwrap_err();
+    assert!(
+        matches!(e, Error::UnknownElementType { code: 42, .. }),
+        "{e}"
+    );
+    let bad = txt.replace("0 2 1</", "0 2 9</");
+    let e = mesh::vtu::read(bad.as_bytes(), "t.vtu".as_ref()).unwrap_err();
+    assert!(matches!(e, Error::NodeOutOfRange { node: 9, .. }), "{e}");
+    let bad = txt.replace("4 7", "4 6");
+    let e = mesh::vtu::read(bad.as_bytes(), "t.vtu".as_ref()).unwrap_err();
+    assert!(e.to_string().starts_with("t.vtu: byte "), "{e}");
+}
+
+#[test]
+fn zlib_compressed_vtu_written_by_meshio() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/mesh");
+    let v = mesh::io::read_path(&dir.join("box_meshio_zlib.vtu")).unwrap();
+    let g = mesh::io::read_path(&dir.join("box_param_bin.msh")).unwrap();
+    // Same nodes and tetrahedra as the Gmsh file it was made from (Gmsh node order).
+    assert_eq!(v.n_nodes(), g.n_nodes());
+    assert_eq!(v.coords, g.coords);
+    assert_eq!(v.tets(), g.tets());
+    // Boundary triangles of all markers together.
+    let n_tri: usize = g.markers.iter().map(|m| m.elements.len()).sum();
+    assert_eq!(v.markers.len(), 1);
+    assert_eq!(v.markers[0].elements.len(), n_tri);
+}

@@ -1,0 +1,9 @@
+//! Integration tests of the `param` public API.
+
+mod common;
+mod constraints;
+mod jacobian;
+mod levels;
+mod master;
+mod props;
+mod registry;

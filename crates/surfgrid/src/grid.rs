@@ -1,0 +1,162 @@
+//! The surface grid tied to the geometry: every node knows its support entity and its
+//! parameters there; every surface component keeps its own parametric triangulation (local
+//! nodes with (u, v); a node on a seam appears twice, once per side).
+
+use geom_db::eval::{ParamCurve, ParamSurface};
+use geom_db::prelude::Point3;
+use geom_db::{CornerId, CurveCompId, GeomDb, SurfCompId};
+use mesh::{ElementKind, Elements, Marker, Mesh, NodeClass};
+
+/// Where a node lies and its parameters there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NodeSupport {
+    /// On a corner.
+    Corner(CornerId),
+    /// On a curve component, at global support-curve parameter `t`.
+    Curve {
+        /// The curve component.
+        comp: CurveCompId,
+        /// Global parameter on the component's support curve.
+        t: f64,
+    },
+    /// Inside a surface component, at global parameters (u, v) of its support surface.
+    Surface {
+        /// The surface component.
+        comp: SurfCompId,
+        /// Global parameters.
+        uv: [f64; 2],
+    },
+    /// Not on the geometry (a node of an imported grid used by no marker, e.g. a volume
+    /// node); it keeps its position.
+    Free,
+}
+
+/// The parametric triangulation of one surface component.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ComponentGrid {
+    /// The surface component.
+    pub comp: SurfCompId,
+    /// Local node → global node.
+    pub nodes: Vec<u32>,
+    /// Local node parameters (u, v) on the component's support surface.
+    pub uv: Vec<[f64; 2]>,
+    /// Local nodes `0..n_boundary` lie on the boundary loops (curve or corner nodes).
+    pub n_boundary: usize,
+    /// Triangles (local nodes), counter-clockwise in the (u, v) plane.
+    pub triangles: Vec<[u32; 3]>,
+    /// True when the inward normal is −r_u × r_v: output triangles are then reversed so
+    /// that every triangle is positively oriented with respect to the inward normal.
+    pub flip: bool,
+}
+
+impl ComponentGrid {
+    /// Triangles in global node numbers, oriented positively w.r.t. the inward normal.
+    pub fn global_triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
+        self.triangles.iter().map(|t| {
+            let g = t.map(|v| self.nodes[v as usize]);
+            if self.flip { [g[0], g[2], g[1]] } else { g }
+        })
+    }
+}
+
+/// A surface grid: nodes with their support, curve discretisations and component grids.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceGrid {
+    /// Node positions.
+    pub coords: Vec<Point3>,
+    /// Node supports (same length as `coords`).
+    pub support: Vec<NodeSupport>,
+    /// Per curve component, its nodes from start to end (empty when not discretised).
+    pub curve_nodes: Vec<Vec<u32>>,
+    /// The component grids.
+    pub components: Vec<ComponentGrid>,
+}
+
+impl SurfaceGrid {
+    /// Number of nodes.
+    pub fn n_nodes(&self) -> usize {
+        self.coords.len()
+    }
+
+    /// Number of triangles.
+    pub fn n_triangles(&self) -> usize {
+        self.components.iter().map(|c| c.triangles.len()).sum()
+    }
+
+    /// The position of node `i` evaluated on its support in `db` (Eq. 2 / Eq. 7 at the
+    /// node's parameters).
+    pub fn evaluate_node(&self, db: &GeomDb, i: usize) -> Point3 {
+        match self.support[i] {
+            NodeSupport::Corner(c) => db.corner(c).point,
+            NodeSupport::Curve { comp, t } => db.curve(db.curve_component(comp).curve).point(t),
+            NodeSupport::Surface { comp, uv } => db
+                .surface(db.surface_component(comp).surface)
+                .point(uv[0], uv[1]),
+            NodeSupport::Free => self.coords[i],
+        }
+    }
+
+    /// The grid as a `mesh::Mesh`: a 3-D grid without cells whose markers hold each surface
+    /// component's triangles (named after the component, or "component k"), with nodes
+    /// classified as Gmsh does: corner k → (0, k+1), curve component k → (1, k+1, [t, 0]),
+    /// surface component k → (2, k+1, [u, v]). Tags are ids + 1 because Gmsh tags are
+    /// positive. Writable as MSH 4.1 with parametric nodes, SU2 or VTU by `mesh`.
+    pub fn to_mesh(&self, db: &GeomDb) -> Mesh {
+        let mut m = Mesh::new(3);
+        m.coords = self.coords.iter().map(|p| [p.x, p.y, p.z]).collect();
+        m.markers = self
+            .components
+            .iter()
+            .map(|c| {
+                let mut el = Elements::new();
+                for t in c.global_triangles() {
+                    el.push(ElementKind::Triangle, &t, None);
+                }
+                Marker {
+                    name: marker_name(db, c.comp),
+                    tag: None,
+                    elements: el,
+                }
+            })
+            .collect();
+        m.classes = Some(
+            self.support
+                .iter()
+                .map(|s| match *s {
+                    NodeSupport::Corner(c) => NodeClass {
+                        dim: 0,
+                        entity: c.0 as i32 + 1,
+                        param: [0.0, 0.0],
+                    },
+                    NodeSupport::Curve { comp, t } => NodeClass {
+                        dim: 1,
+                        entity: comp.0 as i32 + 1,
+                        param: [t, 0.0],
+                    },
+                    NodeSupport::Surface { comp, uv } => NodeClass {
+                        dim: 2,
+                        entity: comp.0 as i32 + 1,
+                        param: uv,
+                    },
+                    NodeSupport::Free => NodeClass {
+                        dim: 3,
+                        entity: 1,
+                        param: [0.0, 0.0],
+                    },
+                })
+                .collect(),
+        );
+        m.parametric = true;
+        m
+    }
+}
+
+/// The marker name of a surface component: its name, or "component k" when it has none.
+pub fn marker_name(db: &GeomDb, c: SurfCompId) -> String {
+    let name = &db.surface_component(c).name;
+    if name.is_empty() {
+        format!("component {}", c.0)
+    } else {
+        name.clone()
+    }
+}

@@ -1,0 +1,7 @@
+//! Integration tests of the surfgrid public API.
+
+mod classify;
+mod common;
+mod curves;
+mod generate;
+mod update;

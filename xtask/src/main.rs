@@ -1,0 +1,75 @@
+//! Project automation (`cargo xtask <task>`), in the manner of rust-analyzer's xtask.
+//!
+//! Tasks: `ci` (fmt, clippy, tests, docs), `tidy` (layering and file-header rules),
+//! `fixtures` (geometry fixtures), `chain` (for now: load and check the default geometry).
+//! Further tasks (`fixtures`, `chain`, `regress`, `bench`) are added as the crates they
+//! drive land.
+
+mod chain;
+mod fixtures;
+mod tidy;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("ci") => ci(),
+        Some("tidy") => tidy::run(&root()),
+        Some("fixtures") => fixtures::run(&root()),
+        Some("chain") => chain::run(&root()),
+        _ => {
+            eprintln!(
+                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check crate layering and file headers\n  fixtures  write the geometry fixtures under fixtures/geom/\n  chain  load, validate and check the default geometry (fixtures/geom/wing_body.ron)"
+            );
+            return ExitCode::from(2);
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// The workspace root (the parent of this crate's manifest directory).
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives in the workspace")
+        .to_path_buf()
+}
+
+/// Runs `cargo` (the one that invoked us) with `args` in the workspace root.
+pub fn cargo(args: &[&str]) -> Result<(), String> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    eprintln!("$ cargo {}", args.join(" "));
+    let status = Command::new(&cargo)
+        .args(args)
+        .current_dir(root())
+        .status()
+        .map_err(|e| format!("cannot run {cargo}: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("cargo {} failed ({status})", args.join(" ")))
+    }
+}
+
+fn ci() -> Result<(), String> {
+    cargo(&["fmt", "--all", "--", "--check"])?;
+    cargo(&[
+        "clippy",
+        "--workspace",
+        "--all-targets",
+        "--",
+        "-D",
+        "warnings",
+    ])?;
+    cargo(&["test", "--workspace"])?;
+    tidy::run(&root())?;
+    cargo(&["doc", "--workspace", "--no-deps"])
+}
