@@ -67,6 +67,13 @@ pub enum Error {
         /// Which quantities conflict or are missing.
         reason: String,
     },
+    /// A wing master could not be bound or evaluated (names the key section, station or
+    /// variable at fault).
+    #[error("wing master: {reason}")]
+    Master {
+        /// What is wrong.
+        reason: String,
+    },
     /// A B-spline basis could not be built.
     #[error(transparent)]
     Geom(#[from] geom_db::Error),

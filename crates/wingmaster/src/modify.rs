@@ -108,19 +108,33 @@ impl SectionModifier {
             .zip(self.base_poly.points())
             .map(|(p, q)| [p[0] - q[0], p[1] - q[1]])
             .collect();
-        let camber_kv = &self.camber_knots;
-        let kv = self.base_poly.knots();
         Ok(self
             .points
             .iter()
-            .enumerate()
-            .map(|(i, q)| {
-                let d = kv.curve_point(&dp, self.t[i]);
-                let c = camber_kv.curve_point(camber_deviation, self.u[i]);
-                let dx = d[0] + c[0];
-                let dz = self.sign[i] * d[1] + c[1];
-                [add(q[0], dx), add(q[1], dz)]
-            })
+            .zip(self.deviation(&dp, camber_deviation))
+            .map(|(q, d)| [add(q[0], d[0]), add(q[1], d[1])])
             .collect())
+    }
+
+    /// The linear part of Eq. (40) at every bound point: Σ_i ΔP_i B_i(t) (its z mirrored on
+    /// the lower surface) + Σ_j ΔQ_j B_j(u), for thickness polygon deviations `dp` (one per
+    /// polygon point of the reference) and camber polygon deviations `dq`. Eq. (40) is
+    /// linear in (ΔP, ΔQ), so this is also the derivative of the points along any
+    /// direction (ΔP, ΔQ); the caller checks the lengths (see [`apply`](Self::apply)).
+    pub fn deviation(&self, dp: &[[f64; 2]], dq: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let camber_kv = &self.camber_knots;
+        let kv = self.base_poly.knots();
+        (0..self.points.len())
+            .map(|i| {
+                let d = kv.curve_point(dp, self.t[i]);
+                let c = camber_kv.curve_point(dq, self.u[i]);
+                [d[0] + c[0], self.sign[i] * d[1] + c[1]]
+            })
+            .collect()
+    }
+
+    /// The reference thickness polygon P*.
+    pub fn base_polygon(&self) -> &ThicknessPolygon {
+        &self.base_poly
     }
 }

@@ -2,6 +2,7 @@
 
 mod conditions;
 mod fit;
+mod master;
 mod modify;
 mod parse;
 mod planform;
