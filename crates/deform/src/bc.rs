@@ -19,6 +19,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::solve::Constraint;
+use crate::support::{SupKind, SupNode, Support, Supports, check_kind, place, point};
 
 /// A rigid motion of a marker (paper Eq. 34): rotation by `angle_deg` about the axis through
 /// `axis_point` along `axis_dir`, then a translation.
@@ -109,6 +110,10 @@ pub enum MarkerRole {
     Fixed,
     /// The marker's nodes slide on the marker's plane (the marker must be planar).
     SlidePlane,
+    /// The marker's nodes slide on the support curves and surfaces of the geometry they are
+    /// classified on (paper §4.3, Eqs. 27–33); needs [`crate::Supports`]
+    /// ([`crate::deform_on_supports`]). Corners are frozen.
+    SlideOnSupport,
 }
 
 /// The boundary conditions of a deformation.
@@ -148,6 +153,8 @@ pub(crate) enum NodeRole {
     Rigid(usize),
     /// Moves by the displacement of index `usize` in the displacement list.
     Displaced(usize),
+    /// An unknown sliding on the support of index `usize` in [`Classified::supports`].
+    OnSupport(usize),
 }
 
 /// Result of classifying the nodes.
@@ -157,6 +164,8 @@ pub(crate) struct Classified {
     pub planes: Vec<PlaneInfo>,
     /// Skin elements of the moving markers (node lists: triangles in 3D, segments in 2D).
     pub skin: Vec<Vec<u32>>,
+    /// Nodes sliding on geometry supports, with their initial parameters.
+    pub supports: Vec<SupNode>,
 }
 
 /// Fits a plane (3D) or a line in the xy plane (2D grids) to points: centroid and unit
@@ -211,6 +220,7 @@ pub(crate) fn classify(
     mesh: &Mesh,
     bc: &BoundaryConditions,
     plane_rel_tol: f64,
+    supports: Option<&Supports>,
 ) -> Result<Classified> {
     let n = mesh.n_nodes();
     let (lo, hi) = mesh.bbox();
@@ -333,6 +343,27 @@ pub(crate) fn classify(
             };
         }
     }
+    // (3') sliding on geometry supports: curve before surface (a surface node also on a
+    // marker that does not slide on supports lies on their common curve: frozen).
+    let sup_nodes = classify_supports(mesh, &role_of_marker, supports, plane_rel_tol, diag)?;
+    for s in &sup_nodes {
+        if s.kind.is_none() {
+            roles[s.node as usize] = NodeRole::Fixed;
+        }
+    }
+    let supports: Vec<SupNode> = sup_nodes
+        .into_iter()
+        .filter_map(|s| {
+            s.kind.map(|kind| SupNode {
+                node: s.node,
+                kind,
+                param: s.param,
+            })
+        })
+        .collect();
+    for (k, s) in supports.iter().enumerate() {
+        roles[s.node as usize] = NodeRole::OnSupport(k);
+    }
     // (2) rigid markers.
     for (k, m) in mesh.markers.iter().enumerate() {
         let Some(MarkerRole::Rigid(motion)) = role_of_marker[k] else {
@@ -386,12 +417,151 @@ pub(crate) fn classify(
         }
         roles[v as usize] = NodeRole::Displaced(k);
     }
+    // Sliding nodes overridden by a motion are no longer sliding.
+    let supports = supports
+        .into_iter()
+        .filter(|s| {
+            !matches!(
+                roles[s.node as usize],
+                NodeRole::Rigid(_) | NodeRole::Displaced(_)
+            )
+        })
+        .collect::<Vec<_>>();
+    for (k, s) in supports.iter().enumerate() {
+        roles[s.node as usize] = NodeRole::OnSupport(k);
+    }
     Ok(Classified {
         roles,
         motions,
         planes,
         skin,
+        supports,
     })
+}
+
+/// A node of a support-sliding marker: its support (`None`: frozen) and parameters.
+struct SupCandidate {
+    node: u32,
+    kind: Option<SupKind>,
+    param: [f64; 2],
+}
+
+/// The nodes of the [`MarkerRole::SlideOnSupport`] markers, with their supports checked
+/// (the node must lie on its support within `rel_tol` × `diag`; its parameters are refined
+/// to the nearest point by Eq. 31 iterations).
+fn classify_supports(
+    mesh: &Mesh,
+    role_of_marker: &[Option<MarkerRole>],
+    supports: Option<&Supports>,
+    rel_tol: f64,
+    diag: f64,
+) -> Result<Vec<SupCandidate>> {
+    let tol = rel_tol * diag;
+    let n = mesh.n_nodes();
+    let mut on_sup = vec![u32::MAX; n];
+    let mut on_other = vec![false; n];
+    let mut any = false;
+    for (k, m) in mesh.markers.iter().enumerate() {
+        let slide = role_of_marker[k] == Some(MarkerRole::SlideOnSupport);
+        any |= slide;
+        let moving = matches!(role_of_marker[k], Some(MarkerRole::Rigid(_)));
+        for (_, e) in m.elements.iter() {
+            for &v in e {
+                if slide {
+                    on_sup[v as usize] = k as u32;
+                } else if !moving {
+                    on_other[v as usize] = true;
+                }
+            }
+        }
+    }
+    if !any {
+        return Ok(Vec::new());
+    }
+    let Some(sp) = supports else {
+        let k = on_sup
+            .iter()
+            .find(|&&k| k != u32::MAX)
+            .copied()
+            .unwrap_or(0);
+        return Err(Error::Support {
+            node: None,
+            entity: format!("marker {}", mesh.markers[k as usize].name),
+            reason: "slides on geometry supports but no geometry / node supports were given".into(),
+        });
+    };
+    let mut of_node: HashMap<u32, Support> = HashMap::new();
+    for &(v, s) in &sp.nodes {
+        if v as usize >= n {
+            return Err(Error::NodeOutOfRange {
+                node: v as usize,
+                nodes: n,
+            });
+        }
+        of_node.insert(v, s);
+    }
+    let db = sp.db;
+    let mut out = Vec::new();
+    for v in 0..n {
+        let k = on_sup[v];
+        if k == u32::MAX {
+            continue;
+        }
+        let node = v as u32;
+        let marker = &mesh.markers[k as usize].name;
+        let Some(s) = of_node.get(&node) else {
+            return Err(Error::Support {
+                node: Some(node),
+                entity: format!("marker {marker}"),
+                reason: "the node slides on the geometry but has no support (not classified on \
+                         a curve, surface or corner)"
+                    .into(),
+            });
+        };
+        let (kind, param) = match *s {
+            Support::Corner => {
+                out.push(SupCandidate {
+                    node,
+                    kind: None,
+                    param: [0.0; 2],
+                });
+                continue;
+            }
+            Support::Curve { curve, t } => (SupKind::Curve(curve), [t, 0.0]),
+            Support::Surface { surface, uv } => {
+                if on_other[v] {
+                    // On the seam with a marker that does not slide on this surface.
+                    out.push(SupCandidate {
+                        node,
+                        kind: None,
+                        param: [0.0; 2],
+                    });
+                    continue;
+                }
+                (SupKind::Surface(surface), uv)
+            }
+        };
+        check_kind(db, node, kind)?;
+        let x = mesh.coords[v];
+        let p = place(db, node, kind, param, x, 1e-14 * diag)?;
+        let r = point(db, kind, p);
+        let dist = ((r[0] - x[0]).powi(2) + (r[1] - x[1]).powi(2) + (r[2] - x[2]).powi(2)).sqrt();
+        if dist.is_nan() || dist > tol {
+            return Err(Error::Support {
+                node: Some(node),
+                entity: crate::support::entity_name(db, kind),
+                reason: format!(
+                    "the node is {dist:e} away from its support (tolerance {tol:e}); given parameters {param:?}"
+                ),
+            });
+        }
+        out.push(SupCandidate {
+            node,
+            kind: Some(kind),
+            param: p,
+        });
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -126,6 +126,17 @@ pub enum Error {
         /// Final relative residual.
         residual: f64,
     },
+    /// A node sliding on a support curve or surface of the geometry cannot be handled: not
+    /// classified, off its support, a singular support, a failed parameter iteration.
+    #[error("{}{entity}: {reason}", node.map(|n| format!("node {n} on ")).unwrap_or_default())]
+    Support {
+        /// The grid node (input numbering), when one is concerned.
+        node: Option<u32>,
+        /// The entity: support curve / surface, marker or grid.
+        entity: String,
+        /// What is wrong.
+        reason: String,
+    },
 }
 
 /// `Result` with [`Error`] as the default error type.

@@ -27,11 +27,12 @@ use serde::Serialize;
 use crate::bc::{BoundaryConditions, Classified, NodeRole, PlaneInfo, classify};
 use crate::error::{Error, Result};
 use crate::rotation::element_rotation;
-use crate::solve::vecops::{CHUNK, V3, max_len};
+use crate::solve::vecops::{CHUNK, V3, max_len, norm};
 use crate::solve::{
     Amg, AmgInfo, AmgOptions, Constraints, Graph, Jacobi, SolveOptions, SolveReport, SymMatrix,
     pcg, point_iteration, reverse_cuthill_mckee,
 };
+use crate::support::{SupKind, Support, Supports, place, point, tangent_constraint};
 
 /// Spring stiffness K_ij of the edge ij (lengths and volumes of the grid at the start of the
 /// increment).
@@ -84,6 +85,12 @@ pub struct DeformOptions {
     pub plane_rel_tol: f64,
     /// Renumber the unknowns by reverse Cuthill–McKee (internal only).
     pub renumber: bool,
+    /// Sliding on geometry supports (Eqs. 27–33): the outer iteration stops when the largest
+    /// node update of an iteration is ≤ this fraction of the largest boundary displacement of
+    /// the increment (a length criterion: with 1e-9 and a 0.1 m motion, 1e-10 m).
+    pub slide_rel_tol: f64,
+    /// Largest number of outer iterations of the sliding on supports per increment.
+    pub max_slide_iters: usize,
 }
 
 impl Default for DeformOptions {
@@ -100,6 +107,8 @@ impl Default for DeformOptions {
             allow_inverted: false,
             plane_rel_tol: 1e-6,
             renumber: true,
+            slide_rel_tol: 1e-9,
+            max_slide_iters: 50,
         }
     }
 }
@@ -161,6 +170,14 @@ pub struct DeformReport {
     pub unknowns: usize,
     /// Sliding nodes (constrained to a plane or a seam line).
     pub sliding: usize,
+    /// Nodes sliding on geometry support curves and surfaces (Eqs. 27–33).
+    pub sliding_on_supports: usize,
+    /// Outer iterations of the sliding on supports, summed over the increments of the last
+    /// attempt (0 without such nodes).
+    pub slide_iterations: usize,
+    /// Largest node update of the last outer iteration, relative to the largest boundary
+    /// displacement of its increment (the convergence measure of the outer iteration).
+    pub slide_update: f64,
     /// Nodes with prescribed motion (moving markers and displacements).
     pub moving: usize,
     /// Planes fitted to sliding markers.
@@ -194,6 +211,9 @@ pub struct DeformReport {
 pub struct Deformed {
     /// New node coordinates.
     pub coords: Vec<[f64; 3]>,
+    /// Final supports and parameters of the nodes that slid on geometry supports (input
+    /// numbering; empty without [`crate::MarkerRole::SlideOnSupport`]).
+    pub supports: Vec<(u32, Support)>,
     /// What was done.
     pub report: DeformReport,
 }
@@ -247,11 +267,18 @@ struct System {
     /// Node of each unknown, in solver order.
     node_of: Vec<u32>,
     cons: Constraints,
+    /// Unknown index of each entry of [`Classified::supports`] (u32::MAX: not an unknown).
+    sup_unk: Vec<u32>,
 }
 
 fn build_system(cls: &Classified, adj: &Adjacency, renumber: bool) -> System {
     let n = cls.roles.len();
-    let is_unk = |r: &NodeRole| matches!(r, NodeRole::Free | NodeRole::Sliding(_));
+    let is_unk = |r: &NodeRole| {
+        matches!(
+            r,
+            NodeRole::Free | NodeRole::Sliding(_) | NodeRole::OnSupport(_)
+        )
+    };
     let mut local = vec![u32::MAX; n];
     let mut nodes: Vec<u32> = Vec::new();
     for (i, r) in cls.roles.iter().enumerate() {
@@ -289,10 +316,16 @@ fn build_system(cls: &Classified, adj: &Adjacency, renumber: bool) -> System {
             items.push((k as u32, c));
         }
     }
+    let sup_unk = cls
+        .supports
+        .iter()
+        .map(|s| unk_of[s.node as usize])
+        .collect();
     System {
         unk_of,
         node_of,
         cons: Constraints { items },
+        sup_unk,
     }
 }
 
@@ -466,8 +499,23 @@ fn solve_one(
     opts: &DeformOptions,
     step_len: f64,
 ) -> SolveReport {
+    solve_tol(a, b, x, cons, pre, opts, step_len, opts.rel_tol)
+}
+
+/// [`solve_one`] with the relative residual `rel_tol`.
+#[allow(clippy::too_many_arguments)]
+fn solve_tol(
+    a: &SymMatrix,
+    b: &[V3],
+    x: &mut [V3],
+    cons: &Constraints,
+    pre: &Pre,
+    opts: &DeformOptions,
+    step_len: f64,
+    rel_tol: f64,
+) -> SolveReport {
     let so = SolveOptions {
-        rel_tol: opts.rel_tol,
+        rel_tol,
         max_iters: opts.max_iters,
     };
     match pre {
@@ -488,6 +536,29 @@ struct StepOut {
     rot_iterations: usize,
     residual: f64,
     amg: Option<AmgInfo>,
+    slide_iterations: usize,
+    slide_update: f64,
+}
+
+/// The constraints of the solve: the planes and seam lines of `sys`, and the tangent plane
+/// or line of every node sliding on a support at its parameters `params`.
+fn constraints(
+    cls: &Classified,
+    sys: &System,
+    sup: Option<&Supports>,
+    params: &[[f64; 2]],
+) -> Result<Constraints> {
+    let mut cons = sys.cons.clone();
+    if let Some(sp) = sup {
+        for (k, s) in cls.supports.iter().enumerate() {
+            let u = sys.sup_unk[k];
+            if u != u32::MAX {
+                cons.items
+                    .push((u, tangent_constraint(sp.db, s.node, s.kind, params[k])?));
+            }
+        }
+    }
+    Ok(cons)
 }
 
 /// One increment: moves `cur` from the state of fraction `s0` to the prescribed state `s1`.
@@ -502,6 +573,8 @@ fn step(
     s: f64,
     opts: &DeformOptions,
     times: &mut PhaseTimes,
+    sup: Option<&Supports>,
+    params: &mut [[f64; 2]],
 ) -> Result<StepOut> {
     let x0 = &mesh.coords;
     let n = cur.len();
@@ -536,6 +609,8 @@ fn step(
         rot_iterations: 0,
         residual: 0.0,
         amg: None,
+        slide_iterations: 0,
+        slide_update: 0.0,
     };
     if max_disp == 0.0 {
         // Nothing moves: the grid is unchanged, bit for bit.
@@ -673,26 +748,121 @@ fn step(
     let t = Instant::now();
     let nu = sys.node_of.len();
     let mut dx = vec![[0.0; 3]; nu];
-    let rep = solve_one(&a, &b, &mut dx, &sys.cons, &pre, opts, max_disp);
-    times.solve += t.elapsed().as_secs_f64();
-    let ok = match opts.solver {
-        SolverKind::PointIteration => rep.iterations < opts.max_iters,
-        _ => rep.converged,
+    let sliding_on_supports = sup.is_some() && sys.sup_unk.iter().any(|&u| u != u32::MAX);
+    let cons = if sliding_on_supports {
+        constraints(cls, sys, sup, params)?
+    } else {
+        sys.cons.clone()
     };
-    if !ok {
-        return Err(Error::NoConvergence {
-            what: "spring system (Eq. 21)".into(),
-            solver: rep.solver,
-            iterations: rep.iterations,
-            residual: rep.rel_residual,
-        });
-    }
+    let rep = solve_one(&a, &b, &mut dx, &cons, &pre, opts, max_disp);
+    let check = |rep: &SolveReport, what: &str| {
+        let ok = match opts.solver {
+            SolverKind::PointIteration => rep.iterations < opts.max_iters,
+            _ => rep.converged,
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(Error::NoConvergence {
+                what: what.into(),
+                solver: rep.solver.clone(),
+                iterations: rep.iterations,
+                residual: rep.rel_residual,
+            })
+        }
+    };
+    check(&rep, "spring system (Eq. 21)")?;
     out.iterations = rep.iterations;
     out.residual = rep.rel_residual;
+    if let (true, Some(sp)) = (sliding_on_supports, sup) {
+        // Outer iteration of the sliding on supports (Eqs. 27–33): place every sliding node
+        // on its support nearest to its tentative position (parameters by Eq. 31 / 28),
+        // re-linearise the constraints there and solve for the correction, until the largest
+        // node update is ≤ slide_rel_tol × the largest boundary displacement.
+        let scale = {
+            let (lo, hi) = mesh.bbox();
+            ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
+        };
+        let bnorm = norm(&b);
+        let mut base = vec![[0.0; 3]; nu];
+        let mut converged = false;
+        let mut update = f64::INFINITY;
+        for outer in 1..=opts.max_slide_iters.max(1) {
+            // Place the sliding nodes.
+            for (k, sn) in cls.supports.iter().enumerate() {
+                let u = sys.sup_unk[k];
+                if u == u32::MAX {
+                    continue;
+                }
+                let i = sn.node as usize;
+                let d = dx[u as usize];
+                let tgt = [cur[i][0] + d[0], cur[i][1] + d[1], cur[i][2] + d[2]];
+                let p = place(sp.db, sn.node, sn.kind, params[k], tgt, 1e-14 * scale)?;
+                params[k] = p;
+                let r = point(sp.db, sn.kind, p);
+                dx[u as usize] = [r[0] - cur[i][0], r[1] - cur[i][1], r[2] - cur[i][2]];
+            }
+            // Largest node update of this iteration.
+            let mut upd = 0.0f64;
+            for (d, b0) in dx.iter().zip(base.iter_mut()) {
+                let e = ((d[0] - b0[0]).powi(2) + (d[1] - b0[1]).powi(2) + (d[2] - b0[2]).powi(2))
+                    .sqrt();
+                upd = upd.max(e);
+                *b0 = *d;
+            }
+            update = upd / max_disp;
+            out.slide_iterations = outer;
+            if upd <= opts.slide_rel_tol * max_disp {
+                converged = true;
+                break;
+            }
+            // Correction: A δ = b − A Δx, δ in the tangent spaces at the new parameters.
+            let cons = constraints(cls, sys, Some(sp), params)?;
+            let mut r = vec![[0.0; 3]; nu];
+            a.residual(&b, &dx, &mut r);
+            let mut rp = r.clone();
+            cons.project(&mut rp);
+            let rn = norm(&rp);
+            let tol = if rn > 0.0 {
+                (opts.rel_tol * bnorm / rn).min(0.5)
+            } else {
+                0.5
+            };
+            let mut delta = vec![[0.0; 3]; nu];
+            let rep = solve_tol(&a, &r, &mut delta, &cons, &pre, opts, max_disp, tol);
+            check(&rep, "spring system (Eq. 21), sliding correction")?;
+            out.iterations += rep.iterations;
+            for (d, e) in dx.iter_mut().zip(&delta) {
+                for q in 0..3 {
+                    d[q] += e[q];
+                }
+            }
+        }
+        out.slide_update = update;
+        if !converged {
+            return Err(Error::NoConvergence {
+                what: format!(
+                    "sliding on supports (Eqs. 27–33): largest node update {update:.3e} × the boundary displacement after"
+                ),
+                solver: "outer iteration".into(),
+                iterations: out.slide_iterations,
+                residual: update,
+            });
+        }
+    }
+    times.solve += t.elapsed().as_secs_f64();
     for (k, &i) in sys.node_of.iter().enumerate() {
         let c = &mut cur[i as usize];
         for q in 0..3 {
             c[q] += dx[k][q];
+        }
+    }
+    if let (true, Some(sp)) = (sliding_on_supports, sup) {
+        // Exactly on the support.
+        for (k, sn) in cls.supports.iter().enumerate() {
+            if sys.sup_unk[k] != u32::MAX {
+                cur[sn.node as usize] = point(sp.db, sn.kind, params[k]);
+            }
         }
     }
     for i in 0..n {
@@ -787,11 +957,47 @@ pub fn deform_with_progress(
     opts: &DeformOptions,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Deformed> {
+    deform_driver(mesh, bc, None, opts, progress)
+}
+
+/// [`deform`] with nodes sliding on the support curves and surfaces of a geometry (paper
+/// §4.3, Eqs. 27–33): the nodes of every [`crate::MarkerRole::SlideOnSupport`] marker slide
+/// on the support `supports` gives them (corners frozen), by the precedence of
+/// [`crate::bc`] (moving > sliding on a curve > sliding on a surface > fixed). The sliding
+/// nodes end exactly on their supports; their final parameters are returned in
+/// [`Deformed::supports`].
+pub fn deform_on_supports(
+    mesh: &Mesh,
+    bc: &BoundaryConditions,
+    supports: &Supports,
+    opts: &DeformOptions,
+) -> Result<Deformed> {
+    deform_driver(mesh, bc, Some(supports), opts, &mut |_, _, _| {})
+}
+
+/// [`deform_on_supports`] calling `progress(phase, done, total)` as it goes.
+pub fn deform_on_supports_with_progress(
+    mesh: &Mesh,
+    bc: &BoundaryConditions,
+    supports: &Supports,
+    opts: &DeformOptions,
+    progress: &mut dyn FnMut(&str, usize, usize),
+) -> Result<Deformed> {
+    deform_driver(mesh, bc, Some(supports), opts, progress)
+}
+
+fn deform_driver(
+    mesh: &Mesh,
+    bc: &BoundaryConditions,
+    sup: Option<&Supports>,
+    opts: &DeformOptions,
+    progress: &mut dyn FnMut(&str, usize, usize),
+) -> Result<Deformed> {
     if !opts.renumber || mesh.n_nodes() < 2 {
-        return deform_inner(mesh, bc, opts, progress);
+        return deform_inner(mesh, bc, sup, opts, progress);
     }
     // Validate in the user's numbering first, so that errors name the user's nodes.
-    classify(mesh, bc, opts.plane_rel_tol)?;
+    classify(mesh, bc, opts.plane_rel_tol, sup)?;
     let t = Instant::now();
     let perm = spatial_order(&mesh.coords);
     let mut m2 = mesh.clone();
@@ -806,9 +1012,40 @@ pub fn deform_with_progress(
             .map(|&(v, d)| (perm[v as usize], d))
             .collect(),
     };
+    let sup2 = sup.map(|sp| Supports {
+        db: sp.db,
+        nodes: sp
+            .nodes
+            .iter()
+            .filter(|(v, _)| (*v as usize) < perm.len())
+            .map(|&(v, s)| (perm[v as usize], s))
+            .collect(),
+    });
     let t_perm = t.elapsed().as_secs_f64();
-    let mut d = deform_inner(&m2, &bc2, opts, progress)?;
+    let mut inv = vec![0u32; perm.len()];
+    for (old, &new) in perm.iter().enumerate() {
+        inv[new as usize] = old as u32;
+    }
+    let mut d = match deform_inner(&m2, &bc2, sup2.as_ref(), opts, progress) {
+        Ok(d) => d,
+        Err(Error::Support {
+            node: Some(v),
+            entity,
+            reason,
+        }) => {
+            return Err(Error::Support {
+                node: Some(inv[v as usize]),
+                entity,
+                reason,
+            });
+        }
+        Err(e) => return Err(e),
+    };
     d.coords = perm.iter().map(|&p| d.coords[p as usize]).collect();
+    for (v, _) in d.supports.iter_mut() {
+        *v = inv[*v as usize];
+    }
+    d.supports.sort_by_key(|e| e.0);
     d.report.seconds.setup += t_perm;
     Ok(d)
 }
@@ -816,13 +1053,14 @@ pub fn deform_with_progress(
 fn deform_inner(
     mesh: &Mesh,
     bc: &BoundaryConditions,
+    sup: Option<&Supports>,
     opts: &DeformOptions,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Deformed> {
     let mut times = PhaseTimes::default();
     let t = Instant::now();
     progress("setup", 0, 1);
-    let cls = classify(mesh, bc, opts.plane_rel_tol)?;
+    let cls = classify(mesh, bc, opts.plane_rel_tol, sup)?;
     let adj = Adjacency::build(mesh);
     let sys = build_system(&cls, &adj, opts.renumber);
     times.setup = t.elapsed().as_secs_f64();
@@ -836,6 +1074,9 @@ fn deform_inner(
     loop {
         attempts.push(inc);
         let mut cur = mesh.coords.clone();
+        let mut params: Vec<[f64; 2]> = cls.supports.iter().map(|s| s.param).collect();
+        let mut slide_iterations = 0;
+        let mut slide_update = 0.0f64;
         let mut iterations = 0;
         let mut rot_iterations = 0;
         let mut residual = 0.0f64;
@@ -843,7 +1084,21 @@ fn deform_inner(
         for m in 1..=inc {
             progress("solve", m - 1, inc);
             let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
-            let o = step(mesh, &cls, bc, &sys, &adj, &mut cur, s, opts, &mut times)?;
+            let o = step(
+                mesh,
+                &cls,
+                bc,
+                &sys,
+                &adj,
+                &mut cur,
+                s,
+                opts,
+                &mut times,
+                sup,
+                &mut params,
+            )?;
+            slide_iterations += o.slide_iterations;
+            slide_update = slide_update.max(o.slide_update);
             iterations += o.iterations;
             rot_iterations += o.rot_iterations;
             residual = residual.max(o.residual);
@@ -898,6 +1153,9 @@ fn deform_inner(
             cells: mesh.cells.len(),
             unknowns: sys.node_of.len(),
             sliding: sys.cons.items.len(),
+            sliding_on_supports: cls.supports.len(),
+            slide_iterations,
+            slide_update,
             moving: nmov,
             planes: cls.planes.clone(),
             increments: inc,
@@ -912,8 +1170,21 @@ fn deform_inner(
             seconds: times,
             notes,
         };
+        let supports = cls
+            .supports
+            .iter()
+            .zip(&params)
+            .map(|(sn, p)| {
+                let s = match sn.kind {
+                    SupKind::Curve(curve) => Support::Curve { curve, t: p[0] },
+                    SupKind::Surface(surface) => Support::Surface { surface, uv: *p },
+                };
+                (sn.node, s)
+            })
+            .collect();
         return Ok(Deformed {
             coords: cur,
+            supports,
             report,
         });
     }

@@ -3,3 +3,4 @@
 mod cases;
 mod identities;
 mod props;
+mod supports;
