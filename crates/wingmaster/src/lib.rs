@@ -17,6 +17,7 @@
 //!   sections.
 //! * [`master`]: the wing master (§5.4, §6.2): [`WingMasterSpec`] (RON) bound to a support
 //!   surface gives a [`WingMaster`], the [`param::MasterSource`] of a wing.
+//! * [`loft`]: a wing support surface from a planform and sections (fixtures, new designs).
 //!
 //! The equations and their derivations are in `docs/crates/wingmaster.md`.
 
@@ -24,6 +25,7 @@ pub mod airfoil;
 pub mod camber;
 pub mod error;
 pub mod fit;
+pub mod loft;
 pub mod master;
 pub mod modify;
 mod piecewise;

@@ -387,3 +387,76 @@ fn spec_round_trip_and_errors() {
     let e = wm.generate(&x_with(&[("tip_tmax", -0.5)])).unwrap_err();
     assert!(e.contains("key section 1"), "{e}");
 }
+
+/// A wing lofted from a planform and two sections, then bound as a wing master: the key
+/// section fits recover the sections' parameters and the planform's frames.
+#[test]
+fn lofted_wing_round_trip() {
+    use wingmaster::planform::{Planform, PlanformSpec};
+    use wingmaster::{CamberLine, SectionParams, ThicknessParams};
+    let pf = Planform::resolve(&PlanformSpec {
+        span: Some(10.0),
+        root_chord: Some(2.0),
+        stations: vec![1.0],
+        taper: vec![0.4],
+        sweep: vec![25f64.to_radians()],
+        dihedral: vec![3f64.to_radians()],
+        ..Default::default()
+    })
+    .unwrap();
+    let mut camber = CamberLine::flat(6).unwrap().points().to_vec();
+    camber[2][1] = 0.02;
+    camber[3][1] = 0.015;
+    let root = SectionParams {
+        name: "root".into(),
+        thickness: ThicknessParams::naca_like(0.14),
+        camber,
+        te_thickness: 0.0,
+    };
+    let tip = SectionParams {
+        name: "tip".into(),
+        thickness: ThicknessParams::naca_like(0.10),
+        camber: CamberLine::flat(6).unwrap().points().to_vec(),
+        te_thickness: 0.0,
+    };
+    let secs = [root.build().unwrap(), tip.build().unwrap()];
+    let twist = [0.0, -0.05];
+    let (surf, rep) = wingmaster::loft::wing_surface("wing", &pf, &secs, &twist, 2, 10).unwrap();
+    eprintln!("loft interpolation error {:.2e}", rep.max_error);
+    assert!(rep.max_error < 1e-4 * 2.0, "{}", rep.max_error);
+    // the surface at v = 0 (root) and v = 1 (tip) passes through the leading edges
+    let le_tip = ParamSurface::point(&surf, 2.0, 1.0);
+    assert!((le_tip - Point3::new(pf.x_le[1], pf.y[1], pf.z[1])).norm() < 1e-12);
+    let mut db = GeomDb::empty("lofted wing");
+    db.surfaces.push(surf);
+    let spec = WingMasterSpec::from_ron_str(
+        r#"(surface: 0, spanwise: V, n_s: 161, n_t: 5, camber_points: 6,
+            key_sections: [(t: 0.0, twist: "a"), (t: 1.0, twist: "b")])"#,
+        "loft",
+    )
+    .unwrap();
+    let wm = spec
+        .bind(&db, &["a".into(), "b".into()], &[0.0, 0.0])
+        .unwrap();
+    for (k, (sp, tw)) in [(&root, twist[0]), (&tip, twist[1])]
+        .into_iter()
+        .enumerate()
+    {
+        let f = wm.key_fit(k);
+        let th = &f.params.thickness;
+        eprintln!(
+            "key {k}: tmax {} (want {}), chord {} (want {}), max error {:.2e}",
+            th.tmax, sp.thickness.tmax, f.frame.chord, pf.chords[k], f.max_error
+        );
+        assert!((th.tmax - sp.thickness.tmax).abs() < 1e-4);
+        assert!((th.xtmax - sp.thickness.xtmax).abs() < 1e-3);
+        assert!((f.frame.chord - pf.chords[k]).abs() < 1e-4 * pf.chords[k]);
+        // the twist (nose up about the leading edge) shows in the chord direction x̂
+        let x = wm.key_frame(k).x;
+        assert!(
+            (x - Vector3::new(tw.cos(), 0.0, -tw.sin())).norm() < 1e-4,
+            "{x}"
+        );
+        assert!(f.max_error < 1e-4);
+    }
+}
