@@ -574,6 +574,49 @@ impl WingMasterSpec {
     }
 }
 
+impl WingMasterSpec {
+    /// [`bind`](Self::bind) with the names and initial values of the master modifier `m`'s
+    /// variables.
+    pub fn bind_modifier(&self, db: &GeomDb, m: &param::MasterModifier) -> Result<WingMaster> {
+        let names: Vec<String> = m.variables.iter().map(|v| v.name.clone()).collect();
+        let x0: Vec<f64> = m.variables.iter().map(|v| v.value).collect();
+        self.bind(db, &names, &x0)
+            .map_err(|e| err(format!("modifier '{}': {e}", m.name)))
+    }
+}
+
+/// The master sources of a parametrisation: every master modifier whose source is
+/// `External(name)` with `name` a key of `specs` gets its wing master bound
+/// ([`WingMasterSpec::bind_modifier`]); pass the result to `Parametrisation::bind`. External
+/// names not in `specs` are left out (param then reports them as missing). A spec used by
+/// two modifiers is an error (the sources are keyed by name and each binding is specific to
+/// its modifier's variables).
+pub fn master_sources(
+    db: &GeomDb,
+    p: &param::Parametrisation,
+    specs: &BTreeMap<String, WingMasterSpec>,
+) -> Result<param::MasterSources> {
+    let mut out = param::MasterSources::new();
+    for m in &p.modifiers {
+        if let param::Modifier::Master(mm) = m
+            && let param::MasterSpec::External(name) = &mm.source
+            && let Some(spec) = specs.get(name)
+        {
+            if out.contains_key(name) {
+                return Err(err(format!(
+                    "wing master '{name}' is used by two master modifiers; give each its own"
+                )));
+            }
+            let wm = spec.bind_modifier(db, mm)?;
+            out.insert(
+                name.clone(),
+                std::sync::Arc::new(wm) as std::sync::Arc<dyn MasterSource>,
+            );
+        }
+    }
+    Ok(out)
+}
+
 /// Per key section: the Eq. (40) deviation of every sample per unit chord in the key's
 /// sample frame (x̂_K, ẑ_K), indexed by sample; `None` when zero.
 type KeyDeviation = Option<Vec<[f64; 2]>>;

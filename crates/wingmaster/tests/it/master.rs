@@ -171,8 +171,12 @@ fn zero_deviation_is_the_sampled_surface_bit_for_bit() {
             assert_eq!(bits(&[g.points[j * 121 + i]]), bits(&[want]));
         }
     }
-    // through param and the model update: nothing moves
-    let prep = parametrisation().bind(&db, &sources(wm)).unwrap();
+    // through param and the model update: nothing moves (sources from the spec map)
+    drop(wm);
+    let p = parametrisation();
+    let specs = std::collections::BTreeMap::from([("wing".to_string(), spec())]);
+    let src = wingmaster::master::master_sources(&db, &p, &specs).unwrap();
+    let prep = p.bind(&db, &src).unwrap();
     let x0 = prep.registry().initial();
     let pts = prep.apply(&x0).unwrap();
     assert_eq!(bits(&pts), bits(db.control_points()));
