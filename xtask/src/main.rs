@@ -5,6 +5,7 @@
 //! Further tasks (`fixtures`, `chain`, `regress`, `bench`) are added as the crates they
 //! drive land.
 
+mod bench;
 mod chain;
 mod fixtures;
 mod tidy;
@@ -17,11 +18,12 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci(),
         Some("tidy") => tidy::run(&root()),
-        Some("fixtures") => fixtures::run(&root()),
+        Some("fixtures") => fixtures::run(&root(), &args[1..]),
         Some("chain") => chain::run(&root()),
+        Some("bench") => bench::run(&root(), &args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check crate layering and file headers\n  fixtures  write the geometry fixtures under fixtures/geom/\n  chain  load, validate and check the default geometry (fixtures/geom/wing_body.ron)"
+                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check crate layering and file headers\n  fixtures  write the geometry fixtures under fixtures/geom/\n  chain  load, validate and check the default geometry (fixtures/geom/wing_body.ron)\n  bench [--quick] [CRATE]...  criterion benchmarks of the crates, summary in target/bench/summary.md"
             );
             return ExitCode::from(2);
         }
