@@ -21,7 +21,9 @@ use intersect::project::{CurveProjector, ProjectOptions, SurfaceProjector};
 use mesh::{ElementKind, Mesh};
 
 use crate::error::{Error, Result};
-use crate::grid::{ComponentGrid, NodeSupport, SurfaceGrid, marker_name};
+use crate::generate::POLE_REL_TOL;
+use crate::grid::{ComponentGrid, NodeSupport, PoleCopy, SurfaceGrid, marker_name};
+use crate::pole::{Side, degenerate_sides, pole_copy_uv};
 
 /// Knobs of the classification.
 #[derive(Debug, Clone, PartialEq)]
@@ -219,6 +221,9 @@ pub fn classify(
         let pr = &surf_proj[c.index()];
         let ([u0, u1], [v0, v1]) = geom_db::eval::ParamSurface::domain(pr.surface());
         let dom = (u1 - u0).max(v1 - v0);
+        let dom_r = ([u0, u1], [v0, v1]);
+        let poles = degenerate_sides(pr.surface(), POLE_REL_TOL * db.reference_length());
+        let mut pole_of: Vec<Option<Side>> = Vec::new();
         let mut local: HashMap<u32, Vec<u32>> = HashMap::new();
         let mut nodes: Vec<u32> = Vec::new();
         let mut uv: Vec<[f64; 2]> = Vec::new();
@@ -243,8 +248,19 @@ pub fn classify(
                     Ok,
                 )?;
             let mut lt = [0u32; 3];
+            let pole_side = |v: u32| {
+                poles
+                    .iter()
+                    .find(|q| (q.point - coords[v as usize]).norm() <= tol)
+                    .map(|q| q.side)
+            };
+            let mut p_uvs = [[0.0; 2]; 3];
+            let sides = t.map(pole_side);
             for (j, &v) in t.iter().enumerate() {
-                let p_uv = match support[v as usize] {
+                if sides[j].is_some() {
+                    continue;
+                }
+                p_uvs[j] = match support[v as usize] {
                     NodeSupport::Surface { uv, .. } => uv,
                     _ => {
                         let f = pr.project_from(&coords[v as usize], seed);
@@ -255,6 +271,33 @@ pub fn classify(
                         }
                     }
                 };
+            }
+            for j in 0..3 {
+                if let Some(side) = sides[j] {
+                    if sides[(j + 1) % 3].is_some() || sides[(j + 2) % 3].is_some() {
+                        return Err(Error::Mismatch {
+                            what: format!(
+                                "a triangle of marker {:?} has two nodes at a pole ({} and another)",
+                                marker_name(db, *c),
+                                t[j]
+                            ),
+                        });
+                    }
+                    p_uvs[j] = pole_copy_uv(side, dom_r, p_uvs[(j + 1) % 3], p_uvs[(j + 2) % 3]);
+                }
+            }
+            for (j, &v) in t.iter().enumerate() {
+                let p_uv = p_uvs[j];
+                if let Some(side) = sides[j] {
+                    // a pole: one local copy per triangle
+                    let l = nodes.len() as u32;
+                    nodes.push(v);
+                    uv.push(p_uv);
+                    is_b.push(true);
+                    pole_of.push(Some(side));
+                    lt[j] = l;
+                    continue;
+                }
                 let copies = local.entry(v).or_default();
                 let found = copies.iter().copied().find(|&l| {
                     let q = uv[l as usize];
@@ -267,6 +310,7 @@ pub fn classify(
                         nodes.push(v);
                         uv.push(p_uv);
                         is_b.push(boundary[v as usize]);
+                        pole_of.push(None);
                         copies.push(l);
                         l
                     }
@@ -289,6 +333,16 @@ pub fn classify(
             n_boundary,
             triangles: ltris.iter().map(|t| t.map(|l| perm[l as usize])).collect(),
             flip,
+            pole_copies: order
+                .iter()
+                .enumerate()
+                .filter_map(|(new, &l)| {
+                    pole_of[l as usize].map(|side| PoleCopy {
+                        local: new as u32,
+                        side,
+                    })
+                })
+                .collect(),
         });
     }
     // curve node lists

@@ -39,11 +39,9 @@ pub enum Error {
         /// The tolerance.
         tol: f64,
     },
-    /// A boundary loop passes through a pole (a point where r_u or r_v vanishes), which the
-    /// generator does not support yet.
-    #[error(
-        "{component} ({name}): boundary node {node} lies on a pole of the surface (|r_u| = {du:.3e}, |r_v| = {dv:.3e}); poles are not supported"
-    )]
+    /// A pole (a point where the surface's parametrisation degenerates) the generator cannot
+    /// handle: inside a curve rather than at a node, two poles in a row, a loop made of poles.
+    #[error("{component} ({name}): boundary node {node} is at an unsupported pole: {what}")]
     Pole {
         /// The surface component.
         component: SurfCompId,
@@ -51,10 +49,8 @@ pub enum Error {
         name: String,
         /// Global node index.
         node: usize,
-        /// |r_u| there.
-        du: f64,
-        /// |r_v| there.
-        dv: f64,
+        /// What is wrong.
+        what: String,
     },
     /// The boundary loops of a component are inconsistently oriented in the parametric plane.
     #[error(

@@ -17,9 +17,14 @@ use intersect::project::{ProjectOptions, SurfaceProjector};
 use crate::aft;
 use crate::curves::discretise_curve;
 use crate::error::{Error, Result};
-use crate::grid::{ComponentGrid, NodeSupport, SurfaceGrid};
+use crate::grid::{ComponentGrid, NodeSupport, PoleCopy, SurfaceGrid};
+use crate::pole::{Domain, Pole, Side, degenerate_sides, fan_ring, pole_copy_uv};
 use crate::smooth::Improve;
 use crate::spacing::SizeField;
+
+/// A side of a support surface's parameter rectangle is degenerate (a pole) when its image
+/// stays within this fraction of the model's reference length.
+pub const POLE_REL_TOL: f64 = 1e-8;
 
 /// Knobs of the generator.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,18 +61,36 @@ impl GenerateOptions {
     }
 }
 
+/// One node of a boundary loop: a regular node with its (u, v), or a pole (global node and
+/// the index of its degenerate side in the surface's pole list).
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum LoopNode {
+    /// Global node and (u, v).
+    At(u32, [f64; 2]),
+    /// Global node on a degenerate side: index into the component's poles.
+    Pole(u32, usize),
+}
+
+/// One boundary loop, without the closing repeat.
+pub(crate) type BoundaryLoop = Vec<LoopNode>;
+
 /// The (u, v) of the boundary nodes of a component, walking its loops (see the module doc).
-/// Returns per loop the sequence of (global node, uv), without the closing repeat.
+/// A node at the image of a degenerate side (a pole) is not projected; the node after it is
+/// projected from seeds spread along the side and the foot farthest along the side from the
+/// arrival is kept (so a loop that reaches a pole along a seam leaves it on the other side
+/// of the seam, as the cap of a cylinder does).
 pub(crate) fn boundary_params(
     db: &GeomDb,
     comp: SurfCompId,
     curve_nodes: &[Vec<u32>],
     coords: &[Point3],
     proj: &SurfaceProjector<'_, geom_db::SupportSurface>,
+    poles: &[Pole],
     tol: f64,
 ) -> Result<Vec<BoundaryLoop>> {
     let sc = db.surface_component(comp);
     let surf = db.surface(sc.surface);
+    let dom = surf.domain();
     let fail = |node: u32, distance: f64| Error::BoundaryProjection {
         component: comp,
         name: sc.name.clone(),
@@ -75,6 +98,7 @@ pub(crate) fn boundary_params(
         distance,
         tol,
     };
+    let pole_at = |p: &Point3| poles.iter().position(|q| (q.point - p).norm() <= tol);
     let mut out = Vec::new();
     for lp in &sc.loops {
         // the node sequence with curve junctions merged
@@ -92,47 +116,126 @@ pub(crate) fn boundary_params(
         if seq.len() > 1 && seq.first() == seq.last() {
             seq.pop();
         }
-        // seed from a global projection of a node away from corners
-        let start = seq.len().min(1);
+        let n = seq.len();
+        let pole: Vec<Option<usize>> = seq.iter().map(|&g| pole_at(&coords[g as usize])).collect();
+        if pole.iter().all(Option::is_some) {
+            return Err(Error::Pole {
+                component: comp,
+                name: sc.name.clone(),
+                node: seq[0] as usize,
+                what: "every node of a boundary loop is a pole".into(),
+            });
+        }
+        for i in 0..n {
+            if pole[i].is_some() && pole[(i + 1) % n].is_some() {
+                return Err(Error::Pole {
+                    component: comp,
+                    name: sc.name.clone(),
+                    node: seq[i] as usize,
+                    what: "two consecutive boundary nodes are poles".into(),
+                });
+            }
+        }
+        // start at a regular node after a regular node, from a global projection
+        let start = (1..=n)
+            .map(|k| k % n)
+            .find(|&k| pole[k].is_none() && pole[(k + n - 1) % n].is_none())
+            .unwrap_or_else(|| (0..n).find(|&k| pole[k].is_none()).expect("checked"));
         let p0 = coords[seq[start] as usize];
         let f0 = proj.project(&p0)?;
         let mut prev = f0.uv;
-        let mut uvs = vec![[0.0; 2]; seq.len()];
-        for k in 0..seq.len() {
-            let i = (start + k) % seq.len();
-            let p = coords[seq[i] as usize];
-            let mut f = proj.project_from(&p, prev);
-            if !f.converged || f.distance > tol {
-                let g = proj.project(&p)?;
-                if g.distance < f.distance || !f.converged {
-                    f = g;
+        let mut after_pole: Option<(usize, f64)> = None;
+        let mut nodes = vec![LoopNode::Pole(0, 0); n];
+        for k in 0..n {
+            let i = (start + k) % n;
+            let g = seq[i];
+            if let Some(pi) = pole[i] {
+                nodes[i] = LoopNode::Pole(g, pi);
+                after_pole = Some((pi, poles[pi].side.along(prev)));
+                continue;
+            }
+            let p = coords[g as usize];
+            let f = match after_pole.take() {
+                None => {
+                    let mut f = proj.project_from(&p, prev);
+                    if !f.converged || f.distance > tol {
+                        let h = proj.project(&p)?;
+                        if h.distance < f.distance || !f.converged {
+                            f = h;
+                        }
+                    }
+                    f
                 }
-            }
+                Some((pi, t_arrival)) => {
+                    // feet from seeds along the side; keep the farthest from the arrival
+                    let side = poles[pi].side;
+                    let [a, b] = side.along_range(dom);
+                    let s_range = match side.along_axis() {
+                        1 => dom.0[1] - dom.0[0],
+                        _ => dom.1[1] - dom.1[0],
+                    };
+                    let mut feet: Vec<_> = (0..=8)
+                        .map(|j| {
+                            let t = a + (b - a) * j as f64 / 8.0;
+                            proj.project_from(&p, side.uv(dom, t, 1e-3 * s_range))
+                        })
+                        .filter(|f| f.converged && f.distance <= tol)
+                        .collect();
+                    feet.push(proj.project(&p)?);
+                    feet.into_iter()
+                        .filter(|f| f.distance <= tol)
+                        .max_by(|x, y| {
+                            let dx = (side.along(x.uv) - t_arrival).abs();
+                            let dy = (side.along(y.uv) - t_arrival).abs();
+                            dx.total_cmp(&dy)
+                        })
+                        .ok_or_else(|| fail(g, f64::INFINITY))?
+                }
+            };
             if f.distance > tol {
-                return Err(fail(seq[i], f.distance));
+                return Err(fail(g, f.distance));
             }
-            // a pole: one of the tangents vanishes
+            // a pole inside a curve (not at a node) or an undetected degenerate side
             let d = surf.derivs(f.uv[0], f.uv[1]);
             let (nu, nv) = (d.du.norm(), d.dv.norm());
             if nu.min(nv) <= 1e-8 * nu.max(nv) {
                 return Err(Error::Pole {
                     component: comp,
                     name: sc.name.clone(),
-                    node: seq[i] as usize,
-                    du: nu,
-                    dv: nv,
+                    node: g as usize,
+                    what: format!(
+                        "a tangent vanishes there (|r_u| = {nu:.3e}, |r_v| = {nv:.3e}) but no side of the parameter rectangle is degenerate"
+                    ),
                 });
             }
-            uvs[i] = f.uv;
+            nodes[i] = LoopNode::At(g, f.uv);
             prev = f.uv;
         }
-        out.push(seq.into_iter().zip(uvs).collect());
+        out.push(nodes);
     }
     Ok(out)
 }
 
-/// One boundary loop: (global node, (u, v)) per node, without the closing repeat.
-pub(crate) type BoundaryLoop = Vec<(u32, [f64; 2])>;
+/// The parametric polygon of a loop: a pole contributes its arrival and departure points on
+/// the degenerate side.
+fn loop_polygon(lp: &[LoopNode], poles: &[Pole], dom: Domain) -> Vec<[f64; 2]> {
+    let n = lp.len();
+    let mut out = Vec::with_capacity(n + 4);
+    for i in 0..n {
+        match lp[i] {
+            LoopNode::At(_, uv) => out.push(uv),
+            LoopNode::Pole(_, pi) => {
+                let side = poles[pi].side;
+                for nb in [lp[(i + n - 1) % n], lp[(i + 1) % n]] {
+                    if let LoopNode::At(_, uv) = nb {
+                        out.push(side.uv(dom, side.along(uv), 0.0));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
 
 fn signed_area(uv: &[[f64; 2]]) -> f64 {
     let n = uv.len();
@@ -147,22 +250,39 @@ fn signed_area(uv: &[[f64; 2]]) -> f64 {
 
 /// Meshes one component given the boundary; returns the component grid with local interior
 /// nodes after the boundary ones, and their parameters.
+///
+/// Local node order: loop nodes (poles excluded), pole copies, then free nodes (the ring
+/// nodes of the pole fans, then the nodes the front created).
 fn mesh_component(
     db: &GeomDb,
     comp: SurfCompId,
     loops: Vec<BoundaryLoop>,
+    poles: &[Pole],
     field: &SizeField,
     passes: usize,
 ) -> Result<ComponentGrid> {
     let sc = db.surface_component(comp);
     let surf = db.surface(sc.surface);
-    let mut nodes = Vec::new();
-    let mut uv = Vec::new();
-    let mut edges = Vec::new();
-    let area0 = signed_area(&loops[0].iter().map(|x| x.1).collect::<Vec<_>>());
+    let dom = surf.domain();
+    let area0 = signed_area(&loop_polygon(&loops[0], poles, dom));
     let reverse = area0 < 0.0;
+    // loop nodes (local 0..n_loop), front edges, and the pole fans
+    let mut nodes: Vec<u32> = Vec::new();
+    let mut uv: Vec<[f64; 2]> = Vec::new();
+    let mut edges: Vec<[u32; 2]> = Vec::new();
+    // ring nodes (uv) get local index n_loop + j after the loop nodes are known
+    let mut ring_uv: Vec<[f64; 2]> = Vec::new();
+    /// A node of a front path or fan: a loop node (local index) or ring node j.
+    #[derive(Clone, Copy)]
+    enum Ref {
+        Loop(u32),
+        Ring(u32),
+    }
+    // fans: (pole global, side, [r_k … r_0])
+    let mut fans: Vec<(u32, Side, Vec<Ref>)> = Vec::new();
+    let mut loop_paths: Vec<Vec<Ref>> = Vec::new();
     for (li, lp) in loops.iter().enumerate() {
-        let a = signed_area(&lp.iter().map(|x| x.1).collect::<Vec<_>>());
+        let a = signed_area(&loop_polygon(lp, poles, dom));
         if li > 0 && (a < 0.0) == (area0 < 0.0) {
             return Err(Error::LoopOrientation {
                 component: comp,
@@ -171,37 +291,149 @@ fn mesh_component(
                 area: a,
             });
         }
-        let base = nodes.len() as u32;
-        for &(g, p) in lp {
-            nodes.push(g);
-            uv.push(p);
+        let mut lp = lp.clone();
+        if reverse {
+            lp.reverse();
         }
-        let m = lp.len() as u32;
+        // local indices of the regular nodes
+        let mut local = vec![u32::MAX; lp.len()];
+        for (i, x) in lp.iter().enumerate() {
+            if let LoopNode::At(g, p) = *x {
+                local[i] = nodes.len() as u32;
+                nodes.push(g);
+                uv.push(p);
+            }
+        }
+        let n = lp.len();
+        let mut path = Vec::new();
+        for i in 0..n {
+            match lp[i] {
+                LoopNode::At(..) => path.push(Ref::Loop(local[i])),
+                LoopNode::Pole(g, pi) => {
+                    let (ip, inx) = ((i + n - 1) % n, (i + 1) % n);
+                    let (LoopNode::At(_, up), LoopNode::At(_, un)) = (lp[ip], lp[inx]) else {
+                        unreachable!("poles are not consecutive (checked)");
+                    };
+                    let side = poles[pi].side;
+                    let s_r = 0.5 * (side.inward(dom, up) + side.inward(dom, un));
+                    // a fan through the whole loop would leave no front: at least 2 triangles
+                    // when the loop has only the two neighbours besides the pole
+                    let k_min = if n <= 3 { 2 } else { 1 };
+                    let (_, ts) = fan_ring(
+                        surf,
+                        side,
+                        &poles[pi].point,
+                        s_r,
+                        side.along(un),
+                        side.along(up),
+                        k_min,
+                    );
+                    // ring from the previous node's side: r_{k−1} … r_1
+                    let mut fan = vec![Ref::Loop(local[ip])];
+                    for &t in ts.iter().rev() {
+                        let j = ring_uv.len() as u32;
+                        ring_uv.push(side.uv(dom, t, s_r));
+                        path.push(Ref::Ring(j));
+                        fan.push(Ref::Ring(j));
+                    }
+                    fan.push(Ref::Loop(local[inx]));
+                    fans.push((g, side, fan));
+                }
+            }
+        }
+        loop_paths.push(path);
+    }
+    let n_loop = nodes.len();
+    let ring0 = n_loop as u32;
+    let resolve = |r: &Ref| match *r {
+        Ref::Loop(l) => l,
+        Ref::Ring(j) => ring0 + j,
+    };
+    for path in &loop_paths {
+        let m = path.len();
         for k in 0..m {
-            let (a, b) = (base + k, base + (k + 1) % m);
-            edges.push(if reverse { [b, a] } else { [a, b] });
+            edges.push([resolve(&path[k]), resolve(&path[(k + 1) % m])]);
         }
     }
-    let n_boundary = nodes.len();
+    let n_ring = ring_uv.len();
+    let mut pts = uv.clone();
+    pts.extend_from_slice(&ring_uv);
     let metric = |p: [f64; 2]| {
         let d = surf.derivs(p[0], p[1]);
         field.surface_metric(&d.point, &d.du, &d.dv)
     };
-    let m = aft::triangulate(uv, &edges, &metric).map_err(|aft::Stuck(remaining, triangles)| {
-        Error::FrontStuck {
-            component: comp,
-            name: sc.name.clone(),
-            remaining,
-            triangles,
+    let m =
+        aft::triangulate(pts, &edges, &metric).map_err(|aft::Stuck(remaining, triangles)| {
+            Error::FrontStuck {
+                component: comp,
+                name: sc.name.clone(),
+                remaining,
+                triangles,
+            }
+        })?;
+    // renumber: loop nodes, pole copies, ring nodes, front nodes
+    let n_pole: usize = fans.iter().map(|f| f.2.len() - 1).sum();
+    let n_front = m.pts.len() - n_loop - n_ring;
+    let shift = |v: u32| -> u32 {
+        if (v as usize) < n_loop {
+            v
+        } else {
+            v + n_pole as u32
         }
-    })?;
+    };
+    let mut all_uv: Vec<[f64; 2]> = Vec::with_capacity(n_loop + n_pole + n_ring + n_front);
+    all_uv.extend_from_slice(&m.pts[..n_loop]);
+    let mut pole_copies = Vec::with_capacity(n_pole);
+    let mut tris: Vec<[u32; 3]> = m.tris.iter().map(|t| t.map(shift)).collect();
+    let fan_ref = |r: &Ref| match *r {
+        Ref::Loop(l) => l,
+        Ref::Ring(j) => (n_loop + n_pole) as u32 + j,
+    };
+    for (g, side, fan) in &fans {
+        for w in fan.windows(2) {
+            // (r_{j+1}, P_j, r_j): r_{j+1} comes first in the fan list (previous side)
+            let (a, b) = (fan_ref(&w[0]), fan_ref(&w[1]));
+            let pl = all_uv.len() as u32;
+            let uva = if (a as usize) < n_loop {
+                m.pts[a as usize]
+            } else {
+                m.pts[a as usize - n_pole]
+            };
+            let uvb = if (b as usize) < n_loop {
+                m.pts[b as usize]
+            } else {
+                m.pts[b as usize - n_pole]
+            };
+            all_uv.push(pole_copy_uv(*side, dom, uva, uvb));
+            nodes.push(*g);
+            pole_copies.push(PoleCopy {
+                local: pl,
+                side: *side,
+            });
+            tris.push([a, pl, b]);
+        }
+    }
+    all_uv.extend_from_slice(&m.pts[n_loop..]);
+    let n_boundary = n_loop + n_pole;
     let eval = |p: [f64; 2]| surf.point(p[0], p[1]);
-    let x = m.pts.iter().map(|p| eval(*p)).collect();
+    let mut x: Vec<Point3> = all_uv.iter().map(|p| eval(*p)).collect();
+    for pc in &pole_copies {
+        x[pc.local as usize] = poles
+            .iter()
+            .find(|q| q.side == pc.side)
+            .expect("a pole copy's side is degenerate")
+            .point;
+    }
+    let mut no_swap = vec![false; all_uv.len()];
+    for pc in &pole_copies {
+        no_swap[pc.local as usize] = true;
+    }
     let mut imp = Improve {
-        uv: m.pts,
+        uv: all_uv,
         x,
-        tris: m.tris,
+        tris,
         n_fixed: n_boundary,
+        no_swap,
         eval: &eval,
     };
     for _ in 0..passes {
@@ -210,14 +442,17 @@ fn mesh_component(
     }
     imp.swap_pass();
     nodes.resize(imp.uv.len(), u32::MAX);
-    Ok(ComponentGrid {
+    let mut g = ComponentGrid {
         comp,
         nodes,
         uv: imp.uv,
         n_boundary,
         triangles: imp.tris,
         flip: sc.inward == geom_db::Orientation::Negative,
-    })
+        pole_copies,
+    };
+    g.refresh_pole_copies(dom);
+    Ok(g)
 }
 
 /// Discretises the curves of the selected components and triangulates each component.
@@ -275,14 +510,17 @@ pub fn generate(db: &GeomDb, field: &SizeField, opts: &GenerateOptions) -> Resul
         curve_nodes[id.index()] = ns;
     }
     let tol = opts.boundary_rel_tol * db.reference_length();
+    let pole_tol = POLE_REL_TOL * db.reference_length();
     let popts = ProjectOptions::default().with_length_scale(db.reference_length());
     let grids: Vec<Result<ComponentGrid>> = comps
         .par_iter()
         .map(|&c| {
             let sc = db.surface_component(c);
-            let proj = SurfaceProjector::new(sc.name.clone(), db.surface(sc.surface), &popts)?;
-            let loops = boundary_params(db, c, &curve_nodes, &coords, &proj, tol)?;
-            mesh_component(db, c, loops, field, opts.passes)
+            let surf = db.surface(sc.surface);
+            let proj = SurfaceProjector::new(sc.name.clone(), surf, &popts)?;
+            let poles = degenerate_sides(surf, pole_tol);
+            let loops = boundary_params(db, c, &curve_nodes, &coords, &proj, &poles, tol)?;
+            mesh_component(db, c, loops, &poles, field, opts.passes)
         })
         .collect();
     let mut components = Vec::with_capacity(grids.len());

@@ -7,6 +7,8 @@ use geom_db::prelude::Point3;
 use geom_db::{CornerId, CurveCompId, GeomDb, SurfCompId};
 use mesh::{ElementKind, Elements, Marker, Mesh, NodeClass};
 
+use crate::pole::{Domain, Side, pole_copy_uv};
+
 /// Where a node lies and its parameters there.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum NodeSupport {
@@ -47,9 +49,57 @@ pub struct ComponentGrid {
     /// True when the inward normal is −r_u × r_v: output triangles are then reversed so
     /// that every triangle is positively oriented with respect to the inward normal.
     pub flip: bool,
+    /// Local nodes that are copies of a pole (a node on a degenerate side of the parameter
+    /// rectangle, see [`crate::pole`]): one copy per triangle of the pole's fan, each a
+    /// boundary local node. Empty for a component without poles.
+    pub pole_copies: Vec<PoleCopy>,
+}
+
+/// A local copy of a pole in a component grid: the local node and the degenerate side it
+/// lies on. Its (u, v) follows the convention of [`crate::pole::pole_copy_uv`]: on the side,
+/// along-side coordinate the mean of the two other vertices of its (only) triangle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoleCopy {
+    /// The local node.
+    pub local: u32,
+    /// The degenerate side.
+    pub side: Side,
 }
 
 impl ComponentGrid {
+    /// Sets the (u, v) of every pole copy by the convention (on its side, along-side
+    /// coordinate the mean of its triangle's two other vertices'); `dom` is the support
+    /// surface's parameter rectangle.
+    pub fn refresh_pole_copies(&mut self, dom: Domain) {
+        if self.pole_copies.is_empty() {
+            return;
+        }
+        let mut side_of = vec![None; self.uv.len()];
+        for pc in &self.pole_copies {
+            side_of[pc.local as usize] = Some(pc.side);
+        }
+        for t in &self.triangles {
+            for i in 0..3 {
+                if let Some(side) = side_of[t[i] as usize] {
+                    let (a, b) = (
+                        self.uv[t[(i + 1) % 3] as usize],
+                        self.uv[t[(i + 2) % 3] as usize],
+                    );
+                    self.uv[t[i] as usize] = pole_copy_uv(side, dom, a, b);
+                }
+            }
+        }
+    }
+
+    /// Marks the pole copies (true at their local index).
+    pub fn pole_mask(&self) -> Vec<bool> {
+        let mut m = vec![false; self.uv.len()];
+        for pc in &self.pole_copies {
+            m[pc.local as usize] = true;
+        }
+        m
+    }
+
     /// Triangles in global node numbers, oriented positively w.r.t. the inward normal.
     pub fn global_triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
         self.triangles.iter().map(|t| {

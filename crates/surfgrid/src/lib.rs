@@ -14,6 +14,7 @@
 //! * [`curves`]: curve discretisation by equidistribution of ∫ ds / h.
 //! * [`generate`](mod@generate): advancing front in each surface component's parametric plane in the
 //!   normalised space of M (desired size one), then swaps and smoothing.
+//! * [`pole`]: degenerate sides of the parameter rectangle (poles) and the fan built there.
 //! * [`grid`]: nodes with their support and parameters, per-component parametric grids,
 //!   conversion to `mesh::Mesh` with Gmsh-like classification.
 //! * [`classify`](mod@classify): an imported grid (SU2, no parameters) tied to the geometry by projection.
@@ -26,6 +27,7 @@ pub mod curves;
 pub mod error;
 pub mod generate;
 pub mod grid;
+pub mod pole;
 mod smooth;
 pub mod spacing;
 pub mod stats;
@@ -34,7 +36,7 @@ pub mod update;
 pub use classify::{ClassifyOptions, ClassifyReport, classify};
 pub use error::{Error, Result};
 pub use generate::{GenerateOptions, generate};
-pub use grid::{ComponentGrid, NodeSupport, SurfaceGrid};
+pub use grid::{ComponentGrid, NodeSupport, PoleCopy, SurfaceGrid};
 pub use spacing::SizeField;
 pub use stats::{GridStats, grid_stats};
 pub use update::{UpdateOptions, UpdateReport, evaluate_frozen, update};

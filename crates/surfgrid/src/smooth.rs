@@ -46,6 +46,9 @@ pub(crate) struct Improve<'f> {
     pub x: Vec<Point3>,
     pub tris: Vec<[u32; 3]>,
     pub n_fixed: usize,
+    /// Nodes no swap may touch (pole copies: each belongs to exactly one triangle); empty
+    /// for none.
+    pub no_swap: Vec<bool>,
     pub eval: &'f (dyn Fn(P) -> Point3 + Sync),
 }
 
@@ -76,6 +79,11 @@ impl Improve<'_> {
                 }
                 let d = self.tris[k2][(j as usize + 2) % 3];
                 if d == c {
+                    continue;
+                }
+                if !self.no_swap.is_empty()
+                    && [a, b, c, d].iter().any(|&v| self.no_swap[v as usize])
+                {
                     continue;
                 }
                 let n1 = [c, a, d];

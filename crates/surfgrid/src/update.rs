@@ -225,9 +225,12 @@ pub fn update(
         let mut uv = cg.uv.clone();
         let mut proj: Option<SurfaceProjector<'_, geom_db::SupportSurface>> = None;
         let mut max_shift: f64 = 0.0;
+        let is_pole = cg.pole_mask();
         for k in 0..nb {
             let g = cg.nodes[k] as usize;
-            if surf_same && out.coords[g] == grid.coords[g] {
+            // a pole copy stays on its degenerate side (its along-side coordinate follows
+            // the convention, refreshed below)
+            if is_pole[k] || (surf_same && out.coords[g] == grid.coords[g]) {
                 continue;
             }
             if proj.is_none() {
@@ -289,6 +292,7 @@ pub fn update(
             x,
             tris: cg.triangles.clone(),
             n_fixed: nb,
+            no_swap: Vec::new(),
             eval: &eval,
         };
         let mut passes = 0;
@@ -312,15 +316,18 @@ pub fn update(
             }
         }
         let oc = &mut out.components[ci];
-        for k in nb..imp.uv.len() {
+        oc.uv = imp.uv;
+        if remapped {
+            oc.refresh_pole_copies(surf.domain());
+        }
+        for k in nb..oc.uv.len() {
             let g = oc.nodes[k] as usize;
             out.coords[g] = imp.x[k];
             out.support[g] = NodeSupport::Surface {
                 comp: cg.comp,
-                uv: imp.uv[k],
+                uv: oc.uv[k],
             };
         }
-        oc.uv = imp.uv;
         reports.push(ComponentUpdate {
             comp: cg.comp.0,
             remapped,

@@ -4,4 +4,5 @@ mod classify;
 mod common;
 mod curves;
 mod generate;
+mod poles;
 mod update;
