@@ -2,14 +2,18 @@
 //! every node gets its support entity and parameters by projection (Eq. 11).
 //!
 //! Markers are matched to surface components by name. A node used by two or more markers, or
-//! lying on a free edge of its marker (an edge used by one triangle of it), is a boundary
-//! node: it is a corner if within the tolerance of a corner of its components' loops,
+//! lying on a free edge of its marker (an edge used by one triangle of it), or lying (within
+//! the tolerance) on a seam curve of its component (a curve component its loops use twice,
+//! e.g. the wing's trailing edge, a cylinder cap's radius) or one of its corners, is a
+//! boundary node: it is a corner if within the tolerance of a corner of its components' loops,
 //! otherwise it is projected on the curve components of those loops (the nearest foot inside
 //! a component's range wins). Other nodes are projected on their component's surface.
 //! A node farther than the tolerance from every candidate is an error naming it.
 //! Boundary nodes get their (u, v) on each adjacent component by projection seeded at a
 //! neighbouring interior node of each triangle, so a node on a seam gets one local copy per
-//! side. Nodes are snapped onto their entity (their positions become the evaluation at the
+//! side. A node at a pole (the image of a degenerate side of the surface's parameter
+//! rectangle, see [`crate::pole`]) gets one local copy per triangle, by the pole-copy
+//! convention. Nodes are snapped onto their entity (their positions become the evaluation at the
 //! recovered parameters); the report gives the distances moved.
 
 use std::collections::HashMap;
@@ -124,6 +128,60 @@ pub fn classify(
         .map(|sc| SurfaceProjector::new(sc.name.clone(), db.surface(sc.surface), &popts))
         .collect::<std::result::Result<_, _>>()?;
     let mut curve_proj: HashMap<u32, CurveProjector<'_, geom_db::SupportCurve>> = HashMap::new();
+    // nodes inside one marker that lie on a seam curve of its component (a curve component
+    // used twice by its loops: the wing's trailing edge, a cylinder cap's radius) or on a
+    // corner of one (the cap's centre, a pole) are boundary nodes too
+    for (c, _) in &comp_tris {
+        let sc = db.surface_component(*c);
+        let mut count: HashMap<CurveCompId, usize> = HashMap::new();
+        for oc in sc.loops.iter().flatten() {
+            *count.entry(oc.comp).or_insert(0) += 1;
+        }
+        let mut seams: Vec<CurveCompId> = count
+            .into_iter()
+            .filter(|&(_, k)| k > 1)
+            .map(|(cc, _)| cc)
+            .collect();
+        seams.sort_unstable();
+        for cc in seams {
+            let comp = db.curve_component(cc);
+            let curve = db.curve(comp.curve);
+            // samples of the component, for a box test and the Newton start
+            let samples: Vec<(f64, Point3)> = (0..=256)
+                .map(|k| {
+                    let t = comp.param_at(k as f64 / 256.0);
+                    (t, curve.point(t))
+                })
+                .collect();
+            let (mut lo, mut hi) = (samples[0].1, samples[0].1);
+            for (_, q) in &samples {
+                lo = lo.inf(q);
+                hi = hi.sup(q);
+            }
+            let pad = 0.01 * (hi - lo).norm() + tol;
+            let pr = CurveProjector::new(curve.name.clone(), curve, &popts)?;
+            let (tlo, thi) = (comp.t0.min(comp.t1), comp.t0.max(comp.t1));
+            for i in 0..n {
+                if boundary[i] || comps_of[i].len() != 1 || comps_of[i][0] != *c {
+                    continue;
+                }
+                let p = coords[i];
+                if (0..3).any(|k| p[k] < lo[k] - pad || p[k] > hi[k] + pad) {
+                    continue;
+                }
+                let t0 = samples
+                    .iter()
+                    .min_by(|a, b| (a.1 - p).norm().total_cmp(&(b.1 - p).norm()))
+                    .map(|x| x.0)
+                    .expect("samples");
+                let f = pr.project_from(&p, t0);
+                let t = f.t.clamp(tlo, thi);
+                if (curve.point(t) - p).norm() <= tol {
+                    boundary[i] = true;
+                }
+            }
+        }
+    }
     let mut support = vec![NodeSupport::Free; n];
     let mut dist = vec![0.0; n];
     let mut used = vec![false; n];
