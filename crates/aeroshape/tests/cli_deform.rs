@@ -166,3 +166,108 @@ fn errors_are_one_line_with_exit_1_or_usage_2() {
     let o = bin().args(["deform", "--help"]).output().unwrap();
     assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("--slide"));
 }
+
+/// A cylindrical shell (r ∈ [1, 1.6], θ ∈ [20°, 70°], z ∈ [0.4, 1.6]) around the side of
+/// `fixtures/geom/cylinder.ron`, written as MSH 4.1 with parametric nodes: the inner face's
+/// nodes are classified on the side's surface component (tag = id + 1) with their (u, v).
+#[test]
+fn slide_on_geometry_supports_from_parametric_msh() {
+    let geom = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/geom/cylinder.ron"
+    ));
+    let db = geom_db::GeomDb::from_ron_str(&std::fs::read_to_string(geom).unwrap(), "cyl").unwrap();
+    let comp = db
+        .surface_components
+        .iter()
+        .position(|c| db.surface(c.surface).name == "side")
+        .expect("side component");
+    let side = db.surface(db.surface_components[comp].surface);
+    let mut m = mesh::generate::box_tets(5, 8, 6, [0.0; 3], [1.0; 3]);
+    for p in m.coords.iter_mut() {
+        let (r, th, z) = (
+            1.0 + 0.6 * p[0],
+            (20.0 + 50.0 * p[1]).to_radians(),
+            0.4 + 1.2 * p[2],
+        );
+        *p = [r * th.cos(), r * th.sin(), z];
+    }
+    let inner = m.marker("x_m").unwrap().elements.node_set();
+    let mut classes = vec![
+        mesh::NodeClass {
+            dim: 3,
+            entity: 1,
+            param: [0.0; 2],
+        };
+        m.n_nodes()
+    ];
+    for &v in &inner {
+        let x = geom_db::prelude::Vector3::from(m.coords[v as usize]);
+        let (uv, dist) = deform::support::project_surface(side, x, None);
+        assert!(dist < 1e-9);
+        let q = geom_db::eval::ParamSurface::point(side, uv[0], uv[1]);
+        m.coords[v as usize] = [q.x, q.y, q.z];
+        classes[v as usize] = mesh::NodeClass {
+            dim: 2,
+            entity: comp as i32 + 1,
+            param: uv,
+        };
+    }
+    m.classes = Some(classes);
+    m.parametric = true;
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("shell.msh");
+    let mut f = std::fs::File::create(&input).unwrap();
+    mesh::io::write(&m, mesh::io::Format::from_path(&input).unwrap(), &mut f).unwrap();
+    drop(f);
+    let m = read(&input);
+    assert!(m.parametric && m.classes.is_some());
+    let out = dir.path().join("turned.msh");
+    let rep = dir.path().join("rep.json");
+    let o = bin()
+        .arg("deform")
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .args(["--rigid", "x_p", "--rotate-deg", "4", "--slide", "x_m"])
+        .arg("--geometry")
+        .arg(geom)
+        .arg("--report")
+        .arg(&rep)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let b = read(&out);
+    let classes = b.classes.as_ref().unwrap();
+    let mut turned = 0.0f64;
+    for &v in &inner {
+        let p = b.coords[v as usize];
+        let c = classes[v as usize];
+        // On the support at the written parameters, and on the cylinder r = 1.
+        let q = geom_db::eval::ParamSurface::point(side, c.param[0], c.param[1]);
+        let dev = ((p[0] - q.x).powi(2) + (p[1] - q.y).powi(2) + (p[2] - q.z).powi(2)).sqrt();
+        assert!(dev <= 1e-12 * 3.0, "node {v}: {dev:e}");
+        assert!(((p[0] * p[0] + p[1] * p[1]).sqrt() - 1.0).abs() < 1e-9);
+        let p0 = m.coords[v as usize];
+        turned = turned.max((p[1].atan2(p[0]) - p0[1].atan2(p0[0])).abs().to_degrees());
+    }
+    assert!(turned > 0.5, "{turned}");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
+    assert!(
+        r["deform"]["sliding_on_supports"].as_u64().unwrap() > 10,
+        "{r}"
+    );
+    assert_eq!(r["quality_after"]["inverted"].as_u64(), Some(0));
+    // Without --geometry the curved marker is refused as not planar.
+    let o = bin()
+        .arg("deform")
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .args(["--rigid", "x_p", "--rotate-deg", "4", "--slide", "x_m"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not planar"));
+}

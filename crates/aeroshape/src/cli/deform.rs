@@ -45,9 +45,17 @@ pub struct DeformArgs {
     /// the mesh file, 0-based).
     #[arg(long, value_name = "FILE.csv")]
     pub displacements: Option<PathBuf>,
-    /// Marker whose nodes slide on its plane (the marker must be planar; repeatable).
+    /// Marker whose nodes slide (repeatable): on the support curves and surfaces of
+    /// --geometry when every node of the marker is classified on a corner, curve or surface
+    /// (MSH 4.1 grid with parametric nodes), otherwise on the marker's plane (the marker must
+    /// then be planar).
     #[arg(long, value_name = "MARKER")]
     pub slide: Vec<String>,
+    /// Geometry (GEOM.ron) the grid's classified nodes lie on: --slide markers slide on its
+    /// support curves and surfaces (paper Eqs. 27–33; node classification as written by
+    /// `aeroshape mesh`: entity tag = component id + 1), corners frozen.
+    #[arg(long, value_name = "GEOM.ron")]
+    pub geometry: Option<PathBuf>,
     /// Marker held fixed (the default for markers not named; repeatable).
     #[arg(long, value_name = "MARKER")]
     pub fixed: Vec<String>,
@@ -188,6 +196,9 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         )
     })?;
     let mut inputs: Vec<&Path> = vec![&args.mesh];
+    if let Some(g) = &args.geometry {
+        inputs.push(g);
+    }
     if let Some(d) = &args.displacements {
         inputs.push(d);
     }
@@ -216,8 +227,34 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     for r in &args.rigid {
         markers.push((r.clone(), MarkerRole::Rigid(motion)));
     }
+    let geometry = match &args.geometry {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).with_context(|| format!("{}", p.display()))?;
+            Some(geom_db::GeomDb::from_ron_str(
+                &text,
+                &p.display().to_string(),
+            )?)
+        }
+        None => None,
+    };
+    let supports = match &geometry {
+        Some(db) => Some(
+            deform::Supports::from_classes(&m, db)
+                .with_context(|| format!("{}", args.mesh.display()))?,
+        ),
+        None => None,
+    };
     for s in &args.slide {
-        markers.push((s.clone(), MarkerRole::SlidePlane));
+        let classified = |sp: &deform::Supports| {
+            let on: std::collections::HashSet<u32> = sp.nodes.iter().map(|e| e.0).collect();
+            m.marker(s)
+                .is_some_and(|mk| mk.elements.node_set().iter().all(|v| on.contains(v)))
+        };
+        let role = match &supports {
+            Some(sp) if classified(sp) => MarkerRole::SlideOnSupport,
+            _ => MarkerRole::SlidePlane,
+        };
+        markers.push((s.clone(), role));
     }
     for f in &args.fixed {
         markers.push((f.clone(), MarkerRole::Fixed));
@@ -251,11 +288,15 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         allow_inverted: args.allow_inverted,
         ..Default::default()
     };
-    let d = deform::deform_with_progress(&m, &bc, &opts, &mut |phase, done, total| {
+    let mut progress = |phase: &str, done: usize, total: usize| {
         if let Some(b) = &bar {
             b.set_message(format!("{phase} ({done}/{total} increments)"));
         }
-    })
+    };
+    let d = match &supports {
+        Some(sp) => deform::deform_on_supports_with_progress(&m, &bc, sp, &opts, &mut progress),
+        None => deform::deform_with_progress(&m, &bc, &opts, &mut progress),
+    }
     .with_context(|| format!("{}", args.mesh.display()))?;
     for note in &d.report.notes {
         eprintln!("note: {note}");
@@ -264,6 +305,17 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     let t = Instant::now();
     let mut out = m;
     out.coords = d.coords;
+    // Nodes that slid on supports carry their new parametric coordinates.
+    if let Some(classes) = out.classes.as_mut() {
+        for &(v, s) in &d.supports {
+            let c = &mut classes[v as usize];
+            match s {
+                deform::Support::Curve { t, .. } => c.param = [t, 0.0],
+                deform::Support::Surface { uv, .. } => c.param = uv,
+                deform::Support::Corner => {}
+            }
+        }
+    }
     aeroshape::fsio::write_atomic(&args.output, |w| mesh::io::write(&out, format, w))?;
     let write = t.elapsed().as_secs_f64();
     if let Some(b) = &bar {
