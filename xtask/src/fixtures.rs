@@ -21,8 +21,122 @@ use geom_db::{
     eval::ParamSurface,
 };
 
-/// Builds all fixtures, checks them and writes them atomically.
-pub fn run(root: &Path) -> Result<(), String> {
+/// Builds all fixtures, checks them and writes them atomically; then (unless
+/// `--geometry-only`) the volume grids of the chain cases (see [`case_grids`]).
+pub fn run(root: &Path, args: &[String]) -> Result<(), String> {
+    geometry(root)?;
+    if args.iter().any(|a| a == "--geometry-only") {
+        return Ok(());
+    }
+    case_grids(root)
+}
+
+/// A chain case whose volume grid `cargo xtask fixtures` makes.
+struct GridCase {
+    /// Folder under fixtures/cases/.
+    dir: &'static str,
+    /// The geometry, relative to the workspace root.
+    geometry: &'static str,
+    /// Uniform wall size.
+    h_wall: f64,
+    /// Far-field size.
+    h_far: f64,
+    /// Far-field box: x min, x max, y max, z min, z max (y min is 0 for a half model, else
+    /// −y max).
+    bbox: [f64; 5],
+    /// Markers: name = surface components.
+    groups: &'static [&'static str],
+}
+
+const GRID_CASES: &[GridCase] = &[GridCase {
+    dir: "sphere",
+    geometry: "fixtures/geom/sphere.ron",
+    h_wall: 0.3,
+    h_far: 2.0,
+    bbox: [-5.0, 5.0, 5.0, -5.0, 5.0],
+    groups: &["sphere=0,1,2,3,4,5"],
+}];
+
+/// The volume grids of the chain cases: aeroshape's own surface grid of the geometry
+/// (`surfgrid::generate`, example `chain_fixture surface`), a far-field box filled with
+/// tetrahedra by Gmsh keeping the wall nodes identical (`fixtures/cases/make_volume.py`,
+/// needs `pip install gmsh`; only here, never in CI), then the wall nodes' classification
+/// re-attached by exact coordinate match (`chain_fixture attach`) and the grid written as
+/// MSH 4.1 (binary) with parametric nodes to `fixtures/cases/<case>/grid.msh`.
+pub fn case_grids(root: &Path) -> Result<(), String> {
+    let py = std::process::Command::new("python3")
+        .args(["-c", "import gmsh"])
+        .status();
+    if !matches!(py, Ok(s) if s.success()) {
+        return Err(
+            "the case grids need Gmsh's Python API: pip install gmsh (or run with --geometry-only)"
+                .into(),
+        );
+    }
+    let tmp = root.join("target").join("fixtures");
+    std::fs::create_dir_all(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+    for c in GRID_CASES {
+        let dir = root.join("fixtures").join("cases").join(c.dir);
+        std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let geom = root.join(c.geometry).display().to_string();
+        let surf = tmp
+            .join(format!("{}_surface.txt", c.dir))
+            .display()
+            .to_string();
+        let vol = tmp
+            .join(format!("{}_volume.msh", c.dir))
+            .display()
+            .to_string();
+        let h = format!("{}", c.h_wall);
+        let mut a: Vec<&str> = vec![
+            "run",
+            "--release",
+            "-q",
+            "-p",
+            "aeroshape",
+            "--example",
+            "chain_fixture",
+            "--",
+            "surface",
+            &geom,
+            &h,
+            &surf,
+        ];
+        a.extend(c.groups.iter().copied());
+        crate::cargo(&a)?;
+        let bbox: Vec<String> = c.bbox.iter().map(|v| v.to_string()).collect();
+        let mut py = std::process::Command::new("python3");
+        py.arg(root.join("fixtures/cases/make_volume.py"))
+            .args([&surf, &vol, "--box"])
+            .args(&bbox)
+            .args(["--h-far", &c.h_far.to_string()]);
+        eprintln!("$ {py:?}");
+        let st = py.status().map_err(|e| format!("python3: {e}"))?;
+        if !st.success() {
+            return Err(format!("make_volume.py failed for case {} ({st})", c.dir));
+        }
+        let out = dir.join("grid.msh").display().to_string();
+        crate::cargo(&[
+            "run",
+            "--release",
+            "-q",
+            "-p",
+            "aeroshape",
+            "--example",
+            "chain_fixture",
+            "--",
+            "attach",
+            &geom,
+            &h,
+            &vol,
+            &out,
+        ])?;
+    }
+    Ok(())
+}
+
+/// The geometry fixtures under fixtures/geom/.
+fn geometry(root: &Path) -> Result<(), String> {
     let dir = root.join("fixtures").join("geom");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let (sphere, err) = sphere(SPHERE_DEGREE)?;

@@ -1,13 +1,13 @@
 //! Project automation (`cargo xtask <task>`), in the manner of rust-analyzer's xtask.
 //!
 //! Tasks: `ci` (fmt, clippy, tests, docs), `tidy` (layering and file-header rules),
-//! `fixtures` (geometry fixtures), `chain` (for now: load and check the default geometry).
-//! Further tasks (`fixtures`, `chain`, `regress`, `bench`) are added as the crates they
-//! drive land.
+//! `fixtures` (geometry fixtures and the chain cases' volume grids), `chain` (the default
+//! case end to end), `regress` (references, ignored tests, round trips), `bench`.
 
 mod bench;
 mod chain;
 mod fixtures;
+mod regress;
 mod tidy;
 
 use std::path::{Path, PathBuf};
@@ -20,10 +20,11 @@ fn main() -> ExitCode {
         Some("tidy") => tidy::run(&root()),
         Some("fixtures") => fixtures::run(&root(), &args[1..]),
         Some("chain") => chain::run(&root()),
+        Some("regress") => regress::run(&root(), &args[1..]),
         Some("bench") => bench::run(&root(), &args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check crate layering and file headers\n  fixtures  write the geometry fixtures under fixtures/geom/\n  chain  load, validate and check the default geometry (fixtures/geom/wing_body.ron)\n  bench [--quick] [CRATE]...  criterion benchmarks of the crates, summary in target/bench/summary.md"
+                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check crate layering and file headers\n  fixtures [--geometry-only]  write the geometry fixtures (fixtures/geom/) and the chain cases' volume grids (needs pip gmsh)\n  chain  run the default case (fixtures/cases/default) into target/chain/ and print a summary\n  regress [--bless]  chain cases against fixtures/reference/, ignored tests, meshio/Gmsh round trips\n  bench [--quick] [CRATE]...  criterion benchmarks of the crates, summary in target/bench/summary.md"
             );
             return ExitCode::from(2);
         }

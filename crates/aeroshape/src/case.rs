@@ -56,9 +56,149 @@ pub struct Case {
     /// The parametrisation of the geometry (paper §5).
     #[serde(default)]
     pub parametrisation: param::Parametrisation,
-    /// The baseline grid (.su2, .msh, .vtu), relative to the case file's folder.
+    /// The baseline grid (.su2, .msh, .vtu), relative to the case file's folder. A `.msh`
+    /// with parametric nodes or an `.su2` grid: the wall markers are tied to the geometry by
+    /// projection (`surfgrid::classify`) either way.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub grid: Option<String>,
+    /// The grid's markers that lie on the geometry and follow it (their triangles belong to
+    /// surface components: by element entity tag = component + 1 in a `.msh`, else by
+    /// projection of the triangle's centroid).
+    #[serde(default)]
+    pub wall: Vec<String>,
+    /// Planar markers whose nodes slide on their plane (e.g. `symmetry`).
+    #[serde(default)]
+    pub slide: Vec<String>,
+    /// Markers that do not move (e.g. `farfield`); markers named nowhere are fixed too.
+    #[serde(default)]
+    pub fixed: Vec<String>,
+    /// Options of the volume deformation (paper §4).
+    #[serde(default)]
+    pub deform: DeformSettings,
+    /// Options of the surface-grid classification and update (paper §3.3).
+    #[serde(default)]
+    pub surface_grid: SurfaceGridSettings,
+}
+
+/// Spring stiffness choice of the case file (see `deform::Stiffness`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum StiffnessChoice {
+    /// K = 1 / l.
+    InverseLength,
+    /// K = 1 / l² (default).
+    #[default]
+    InverseLengthSquared,
+    /// K = (1 / l²)(V̄ / V_ij).
+    Volume,
+}
+
+/// Linear solver choice of the case file (see `deform::SolverKind`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum SolverChoice {
+    /// Conjugate gradients with smoothed-aggregation multigrid (default).
+    #[default]
+    PcgMultigrid,
+    /// Conjugate gradients with Jacobi.
+    PcgJacobi,
+    /// The paper's point iteration (Eq. 22).
+    PointIteration,
+}
+
+/// Deformation options of a case; every field has the default of `deform::DeformOptions`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DeformSettings {
+    /// Spring stiffness.
+    pub stiffness: StiffnessChoice,
+    /// Use the adaptation matrices R (Eqs. 18–26).
+    pub adapt_rotation: bool,
+    /// Linear solver.
+    pub solver: SolverChoice,
+    /// Relative residual at which a solve stops.
+    pub rel_tol: f64,
+    /// Iteration limit of one solve.
+    pub max_iters: usize,
+    /// Quality guard: split into increments below this fraction of the initial minimum.
+    pub min_quality_ratio: f64,
+    /// Largest number of increments.
+    pub max_increments: usize,
+}
+
+impl Default for DeformSettings {
+    fn default() -> Self {
+        let d = deform::DeformOptions::default();
+        Self {
+            stiffness: StiffnessChoice::default(),
+            adapt_rotation: d.adapt_rotation,
+            solver: SolverChoice::default(),
+            rel_tol: d.rel_tol,
+            max_iters: d.max_iters,
+            min_quality_ratio: d.min_quality_ratio,
+            max_increments: d.max_increments,
+        }
+    }
+}
+
+impl DeformSettings {
+    /// The `deform` options these settings give.
+    pub fn options(&self) -> deform::DeformOptions {
+        deform::DeformOptions {
+            stiffness: match self.stiffness {
+                StiffnessChoice::InverseLength => deform::Stiffness::InverseLength,
+                StiffnessChoice::InverseLengthSquared => deform::Stiffness::InverseLengthSquared,
+                StiffnessChoice::Volume => deform::Stiffness::Volume,
+            },
+            adapt_rotation: self.adapt_rotation,
+            solver: match self.solver {
+                SolverChoice::PcgMultigrid => deform::SolverKind::PcgMultigrid,
+                SolverChoice::PcgJacobi => deform::SolverKind::PcgJacobi,
+                SolverChoice::PointIteration => deform::SolverKind::PointIteration,
+            },
+            rel_tol: self.rel_tol,
+            max_iters: self.max_iters,
+            min_quality_ratio: self.min_quality_ratio,
+            max_increments: self.max_increments,
+            ..deform::DeformOptions::default()
+        }
+    }
+}
+
+/// Surface-grid options of a case; every field has the default of `surfgrid`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SurfaceGridSettings {
+    /// Largest wall-node distance from the geometry accepted when the grid is classified,
+    /// relative to the model's reference length.
+    pub classify_rel_tol: f64,
+    /// Largest number of parametric smoothing passes per component in the update.
+    pub max_passes: usize,
+    /// Smoothing stops at this fraction of the initial worst triangle quality.
+    pub quality_fraction: f64,
+    /// Largest distance of a re-projected boundary node, relative.
+    pub boundary_rel_tol: f64,
+}
+
+impl Default for SurfaceGridSettings {
+    fn default() -> Self {
+        let u = surfgrid::UpdateOptions::default();
+        Self {
+            classify_rel_tol: surfgrid::ClassifyOptions::default().rel_tol,
+            max_passes: u.max_passes,
+            quality_fraction: u.quality_fraction,
+            boundary_rel_tol: u.boundary_rel_tol,
+        }
+    }
+}
+
+impl SurfaceGridSettings {
+    /// The `surfgrid::update` options.
+    pub fn update_options(&self) -> surfgrid::UpdateOptions {
+        surfgrid::UpdateOptions {
+            max_passes: self.max_passes,
+            quality_fraction: self.quality_fraction,
+            boundary_rel_tol: self.boundary_rel_tol,
+        }
+    }
 }
 
 fn syntax(path: &str, e: ron::error::SpannedError) -> CaseError {
@@ -119,6 +259,11 @@ impl Case {
     /// The geometry file's path.
     pub fn geometry_path(&self, case_path: &Path) -> PathBuf {
         Self::resolve(case_path, &self.geometry)
+    }
+
+    /// The grid file's path, if the case names one.
+    pub fn grid_path(&self, case_path: &Path) -> Option<PathBuf> {
+        self.grid.as_ref().map(|g| Self::resolve(case_path, g))
     }
 
     /// The case as pretty RON.

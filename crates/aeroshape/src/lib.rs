@@ -6,3 +6,6 @@
 pub mod case;
 pub mod fsio;
 pub mod plot;
+pub mod study;
+
+pub use study::{Evaluation, Study};

@@ -9,6 +9,7 @@ pub mod geom;
 pub mod geom_import;
 pub mod mesh;
 pub mod param;
+pub mod run;
 pub mod section;
 pub mod surfgrid;
 
@@ -33,6 +34,10 @@ enum Command {
     /// List design variables and apply a design vector to a case's geometry (paper §5).
     #[command(subcommand)]
     Param(param::ParamCmd),
+    /// Run the whole chain for a case (paper Fig. 5): design vector → parametrisation →
+    /// model update → surface-grid update → volume deformation; writes the deformed grid
+    /// (.su2, .msh, .vtu), the baseline grid, the updated geometry, report.json and pictures.
+    Run(run::RunArgs),
     /// Fit and build wing sections (thickness parameters of Eq. 39, camber B-spline; §6.1).
     #[command(subcommand)]
     Section(section::SectionCmd),
@@ -67,6 +72,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Geom(cmd) => geom::run(cmd),
         Command::Mesh(cmd) => mesh::run(cmd),
         Command::Param(cmd) => param::run(cmd),
+        Command::Run(args) => run::run(args),
         Command::Section(cmd) => section::run(cmd),
         Command::Surfgrid(cmd) => surfgrid::run(cmd),
     }
