@@ -141,12 +141,52 @@ impl Model {
     }
 
     fn eval(&self, sigma: f64) -> crate::section::SectionPoint {
-        let mut e = self.sec.eval(sigma);
+        self.mapped(self.sec.eval(sigma))
+    }
+
+    /// A point of the section (local frame) placed in the data frame.
+    fn mapped(&self, mut e: crate::section::SectionPoint) -> crate::section::SectionPoint {
         let p = self.map(e.p);
         e.p = [p[0] + self.d[0], p[1] + self.d[1]];
         e.dp = self.map(e.dp);
         e
     }
+}
+
+/// [`project`] that also returns the section point (local frame) at the returned foot, so
+/// that the caller does not evaluate it again. The foot is the last σ at which the section
+/// was evaluated: the final Newton step, below 1e-11, is not applied.
+fn project_eval(sec: &Model, q: [f64; 2], sigma0: f64) -> (f64, crate::section::SectionPoint) {
+    let mut s = sigma0;
+    for _ in 0..30 {
+        let eu = sec.sec.eval(s);
+        let e = sec.mapped(eu);
+        let r = [e.p[0] - q[0], e.p[1] - q[1]];
+        let g = r[0] * e.dp[0] + r[1] * e.dp[1];
+        let h = e.dp[0] * e.dp[0] + e.dp[1] * e.dp[1];
+        if h <= 0.0 || !h.is_finite() {
+            return (s, eu);
+        }
+        let step = (-g / h).clamp(-0.1, 0.1);
+        let sn = (s + step).clamp(-1.0, 1.0);
+        if (sn - s).abs() < 1e-11 {
+            return (s, eu);
+        }
+        s = sn;
+    }
+    (s, sec.sec.eval(s))
+}
+
+/// The signed normal distance of q from the section point e (data frame) and the normal.
+fn distance_from(e: &crate::section::SectionPoint, q: [f64; 2]) -> (f64, [f64; 2]) {
+    let len = (e.dp[0] * e.dp[0] + e.dp[1] * e.dp[1]).sqrt();
+    let n = if len > 0.0 {
+        [-e.dp[1] / len, e.dp[0] / len]
+    } else {
+        [0.0, 1.0]
+    };
+    let d = n[0] * (q[0] - e.p[0]) + n[1] * (q[1] - e.p[1]);
+    (d, n)
 }
 
 /// Projects q onto the section starting from σ0 (Gauss–Newton on (p − q)·p′ = 0, clamped
@@ -175,15 +215,7 @@ fn project(sec: &Model, q: [f64; 2], sigma0: f64) -> f64 {
 }
 
 fn normal_distance(sec: &Model, q: [f64; 2], s: f64) -> (f64, [f64; 2]) {
-    let e = sec.eval(s);
-    let len = e.dp[0].hypot(e.dp[1]);
-    let n = if len > 0.0 {
-        [-e.dp[1] / len, e.dp[0] / len]
-    } else {
-        [0.0, 1.0]
-    };
-    let d = n[0] * (q[0] - e.p[0]) + n[1] * (q[1] - e.p[1]);
-    (d, n)
+    distance_from(&sec.eval(s), q)
 }
 
 /// Initial feet: nearest of a sampling of the curve on the point's own surface.
@@ -484,14 +516,19 @@ fn fit_from(
     };
     let mut sec = build(&theta)?;
     let mut sigma = initial_sigma(&sec, pts, na.le_index);
-    let eval_cost = |sec: &Model, sigma: &[f64]| -> f64 {
+    // The section points at the feet (local frame), kept with σ so that the Jacobian and the
+    // cost need no further evaluation.
+    let mut evs: Vec<crate::section::SectionPoint> =
+        sigma.iter().map(|&s| sec.sec.eval(s)).collect();
+    let eval_cost = |sec: &Model, evs: &[crate::section::SectionPoint]| -> f64 {
         pts.iter()
-            .zip(sigma)
-            .map(|(&q, &s)| normal_distance(sec, q, s).0.powi(2))
+            .zip(evs)
+            .map(|(&q, e)| distance_from(&sec.mapped(*e), q).0.powi(2))
             .sum()
     };
-    let mut cost = eval_cost(&sec, &sigma);
+    let mut cost = eval_cost(&sec, &evs);
     let mut lambda = 1e-3;
+    let mut nu = 2.0;
     let mut iterations = 0;
     let mut slow = 0;
     let mut jac = DMatrix::<f64>::zeros(npts, np);
@@ -506,17 +543,16 @@ fn fit_from(
         let p = tk.degree();
         let mut local = vec![0.0; p + 1];
         let mut cb = vec![0.0; camber_kv.degree() + 1];
-        for (i, (&q, &s)) in pts.iter().zip(&sigma).enumerate() {
-            let (d, n) = normal_distance(&sec, q, s);
+        for (i, (&q, &e)) in pts.iter().zip(&evs).enumerate() {
+            let (d, n) = distance_from(&sec.mapped(e), q);
             res[i] = d;
-            let e = sec.sec.eval(s);
             let x = e.p[0];
             let (ma, mb) = sec.ab();
             // Frame columns: ∂P/∂δx = (1 − px, −pz), ∂P/∂δz = (pz, 1 − px).
             jac[(i, nd)] = -(n[0] * (1.0 - e.p[0]) - n[1] * e.p[1]);
             jac[(i, nd + 1)] = -(n[0] * e.p[1] + n[1] * (1.0 - e.p[0]));
             let n = [ma * n[0] + mb * n[1], -mb * n[0] + ma * n[1]];
-            let span = tk.basis_into(e.t, &mut local);
+            let span = crate::piecewise::basis_into(tk, e.t, &mut local);
             let c = sec.sec.camber_z(x);
             let r = sec.sec.ramp(x);
             for j in 0..nt {
@@ -534,7 +570,7 @@ fn fit_from(
                 jac[(i, j)] = -(n[0] * dx + n[1] * pz);
             }
             if nd > nt {
-                let cspan = camber_kv.basis_into(x.clamp(0.0, 1.0), &mut cb);
+                let cspan = crate::piecewise::basis_into(&camber_kv, x.clamp(0.0, 1.0), &mut cb);
                 let cp = camber_kv.degree();
                 for j in nt..nd {
                     jac[(i, j)] = 0.0;
@@ -547,14 +583,25 @@ fn fit_from(
                 }
             }
         }
-        let a = jac.tr_mul(&jac);
+        // JᵀJ from the column dot products, upper triangle mirrored (half the work).
+        let mut a = DMatrix::<f64>::zeros(np, np);
+        for k in 0..np {
+            let ck = jac.column(k);
+            for l in k..np {
+                let v = ck.dot(&jac.column(l));
+                a[(k, l)] = v;
+                a[(l, k)] = v;
+            }
+        }
         let g = jac.tr_mul(&res);
         let dmax = (0..np).map(|k| a[(k, k)]).fold(0.0f64, f64::max);
         let mut accepted = false;
         while lambda < 1e12 {
             let mut m = a.clone();
+            let mut dg = vec![0.0; np];
             for k in 0..np {
-                m[(k, k)] += lambda * a[(k, k)].max(1e-12 * dmax);
+                dg[k] = a[(k, k)].max(1e-12 * dmax);
+                m[(k, k)] += lambda * dg[k];
             }
             let Some(ch) = m.cholesky() else {
                 lambda *= 10.0;
@@ -566,19 +613,32 @@ fn fit_from(
                 lambda *= 10.0;
                 continue;
             };
-            let tsig: Vec<f64> = pts
+            let (tsig, tevs): (Vec<f64>, Vec<crate::section::SectionPoint>) = pts
                 .iter()
                 .zip(&sigma)
-                .map(|(&q, &s)| project(&tsec, q, s))
-                .collect();
-            let tcost = eval_cost(&tsec, &tsig);
+                .map(|(&q, &s)| project_eval(&tsec, q, s))
+                .unzip();
+            let tcost = eval_cost(&tsec, &tevs);
             if tcost < cost {
                 let rel = (cost - tcost) / cost.max(1e-300);
+                // Gain ratio: actual decrease over the decrease of the linear model,
+                // L(0) − L(δ) = δᵀAδ + 2λ δᵀDδ (from (A + λD)δ = −g).
+                let ad = &a * &delta;
+                let pred = delta.dot(&ad)
+                    + 2.0 * lambda * (0..np).map(|k| dg[k] * delta[k] * delta[k]).sum::<f64>();
+                let rho = if pred > 0.0 {
+                    (cost - tcost) / pred
+                } else {
+                    0.0
+                };
                 theta = trial;
                 sec = tsec;
                 sigma = tsig;
+                evs = tevs;
                 cost = tcost;
-                lambda = (lambda / 3.0).max(1e-9);
+                // Nielsen's update of the damping.
+                lambda = (lambda * (1.0 / 3.0f64).max(1.0 - (2.0 * rho - 1.0).powi(3))).max(1e-9);
+                nu = 2.0;
                 accepted = true;
                 slow = if rel < opts.tolerance { slow + 1 } else { 0 };
                 if slow >= 3 {
@@ -586,7 +646,8 @@ fn fit_from(
                 }
                 break;
             }
-            lambda *= 10.0;
+            lambda *= nu;
+            nu *= 2.0;
         }
         if !accepted || lambda >= 1e12 {
             break;
