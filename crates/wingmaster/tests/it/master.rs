@@ -464,3 +464,52 @@ fn lofted_wing_round_trip() {
         assert!(f.max_error < 1e-4);
     }
 }
+
+/// On an unswept lofted wing (Λ₀ = 0) a sweep change ΔΛ shifts every leading edge by
+/// tan(ΔΛ)·(y − y_root) along x, and a dihedral change ΔΓ raises it by tan(ΔΓ)·(y − y_root).
+#[test]
+fn sweep_of_an_unswept_wing_is_tan_delta_times_y() {
+    use wingmaster::planform::{Planform, PlanformSpec};
+    use wingmaster::{CamberLine, SectionParams, ThicknessParams};
+    let pf = Planform::resolve(&PlanformSpec {
+        span: Some(8.0),
+        root_chord: Some(1.5),
+        stations: vec![0.5, 1.0],
+        taper: vec![0.8, 0.5],
+        ..Default::default()
+    })
+    .unwrap();
+    let sec = SectionParams {
+        name: "s".into(),
+        thickness: ThicknessParams::naca_like(0.12),
+        camber: CamberLine::flat(6).unwrap().points().to_vec(),
+        te_thickness: 0.0,
+    }
+    .build()
+    .unwrap();
+    let secs = [sec.clone(), sec.clone(), sec];
+    let (surf, _) = wingmaster::loft::wing_surface("wing", &pf, &secs, &[0.0; 3], 2, 8).unwrap();
+    let mut db = GeomDb::empty("unswept wing");
+    db.surfaces.push(surf);
+    let spec = WingMasterSpec::from_ron_str(
+        r#"(surface: 0, spanwise: V, n_s: 81, n_t: 9, camber_points: 6,
+            planform: (sweep: "sweep", dihedral: "dihedral"),
+            key_sections: [(t: 0.0), (t: 1.0)])"#,
+        "unswept",
+    )
+    .unwrap();
+    let names: Vec<String> = vec!["sweep".into(), "dihedral".into()];
+    let wm = spec.bind(&db, &names, &[0.0, 0.0]).unwrap();
+    let (s0, d0) = wm.initial_sweep_dihedral();
+    assert!(s0.abs() < 1e-12 && d0.abs() < 1e-12, "{s0} {d0}");
+    let (dl, dg) = (0.1, 0.05);
+    let g = wm.generate(&[dl, dg]).unwrap();
+    for j in 0..9 {
+        let f0 = wm.station_frame(j);
+        let f1 = wingmaster::master::section_frame(station(&g, j), Vector3::y(), 0.0).unwrap();
+        let eta = f0.y - wm.key_frame(0).y;
+        let d = f1.leading_edge - f0.leading_edge;
+        let want = Vector3::new(dl.tan() * eta, 0.0, dg.tan() * eta);
+        assert!((d - want).norm() < 1e-12, "station {j}: {d} vs {want}");
+    }
+}
