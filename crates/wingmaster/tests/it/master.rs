@@ -513,3 +513,35 @@ fn sweep_of_an_unswept_wing_is_tan_delta_times_y() {
         assert!((d - want).norm() < 1e-12, "station {j}: {d} vs {want}");
     }
 }
+
+/// The control-node Jacobian of `param` with the wing master's exact master Jacobian agrees
+/// with central differences of the control-node positions.
+#[test]
+fn control_node_jacobian_through_param() {
+    let db = wing_body();
+    let prep = parametrisation().bind(&db, &sources(bind(&db))).unwrap();
+    let n = names();
+    let x: Vec<f64> = (0..n.len()).map(|k| 0.0007 * (k as f64 + 1.0)).collect();
+    let (_, j) = prep.apply_with_jacobian(&x).unwrap();
+    for l in 0..n.len() {
+        let h = 1e-6;
+        let (mut xp, mut xm) = (x.clone(), x.clone());
+        xp[l] += h;
+        xm[l] -= h;
+        let (pp, pm) = (prep.apply(&xp).unwrap(), prep.apply(&xm).unwrap());
+        let col = j.column(l);
+        let (mut err, mut size) = (0.0f64, 0.0f64);
+        for (k, (a, b)) in pp.iter().zip(&pm).enumerate() {
+            for c in 0..3 {
+                let fd = (a[c] - b[c]) / (2.0 * h);
+                size = size.max(fd.abs());
+                err = err.max((col[3 * k + c] - fd).abs());
+            }
+        }
+        assert!(
+            err <= 1e-6 * size.max(1e-3),
+            "{}: {err} (size {size})",
+            n[l]
+        );
+    }
+}
