@@ -197,6 +197,7 @@ fn stiffness_from_env() -> deform::Stiffness {
     match std::env::var("DEFORM_BENCH_STIFFNESS").as_deref() {
         Ok("l") => deform::Stiffness::InverseLength,
         Ok("volume") => deform::Stiffness::Volume,
+        Ok("wall") => deform::Stiffness::WallDistance,
         _ => deform::Stiffness::InverseLengthSquared,
     }
 }
@@ -207,7 +208,13 @@ fn figures() {
         .split(',')
         .filter_map(|s| s.trim().parse().ok())
         .collect();
-    println!("threads: {}", rayon::current_num_threads());
+    println!(
+        "threads: {}, load average at start: {}",
+        rayon::current_num_threads(),
+        std::fs::read_to_string("/proc/loadavg")
+            .unwrap_or_default()
+            .trim()
+    );
     for &n in &sizes {
         let t = Instant::now();
         let (m, bc) = case(n);
@@ -364,7 +371,13 @@ fn figures() {
                 d.report.iterations
             );
         }
-        println!("peak RSS so far: {:.0} MB", peak_rss_mb());
+        println!(
+            "peak RSS so far: {:.0} MB; load average: {}",
+            peak_rss_mb(),
+            std::fs::read_to_string("/proc/loadavg")
+                .unwrap_or_default()
+                .trim()
+        );
     }
 }
 

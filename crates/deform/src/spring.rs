@@ -45,6 +45,11 @@ pub enum Stiffness {
     /// K = (1 / l²) · (V̄ / V_ij): V_ij the smaller of the end nodes' mean adjacent cell volumes,
     /// V̄ the mean cell volume; stiffens the small cells near walls.
     Volume,
+    /// K = (1 / l²) · (1 + (ℓ / d_ij)²): d_ij the distance of the edge's midpoint to the
+    /// moving boundary (mean of the end nodes' shortest paths along grid edges, ≥ l/2), ℓ =
+    /// 0.2 × the diagonal of the moving boundary's bounding box; stiffens a layer around
+    /// moving bodies so that it moves almost rigidly (with R) on any grid, graded or not.
+    WallDistance,
 }
 
 /// The linear solver.
@@ -333,8 +338,13 @@ fn build_system(cls: &Classified, adj: &Adjacency, renumber: bool) -> System {
 struct Springs<'a> {
     x: &'a [[f64; 3]],
     kind: Stiffness,
-    /// For [`Stiffness::Volume`]: V̄ / V_node per node.
+    /// For [`Stiffness::Volume`]: V̄ / V_node per node; for [`Stiffness::WallDistance`]:
+    /// the distance d_node to the moving boundary.
     vol_factor: Vec<f64>,
+    /// ℓ of [`Stiffness::WallDistance`].
+    wall_len: f64,
+    /// p of [`Stiffness::WallDistance`].
+    wall_pow: f64,
 }
 
 impl Springs<'_> {
@@ -346,12 +356,84 @@ impl Springs<'_> {
             Stiffness::InverseLength => 1.0 / l2.sqrt(),
             Stiffness::InverseLengthSquared => 1.0 / l2,
             Stiffness::Volume => self.vol_factor[i].max(self.vol_factor[j]) / l2,
+            Stiffness::WallDistance => {
+                // Distance of the edge's midpoint, ≥ l / 2 next to the wall.
+                let d = 0.5 * (self.vol_factor[i] + self.vol_factor[j]);
+                (1.0 + (self.wall_len / d).powf(self.wall_pow)) / l2
+            }
         }
     }
 }
 
-fn springs<'a>(mesh: &Mesh, x: &'a [[f64; 3]], kind: Stiffness) -> Springs<'a> {
+/// ℓ / (diagonal of the moving boundary's bounding box) of [`Stiffness::WallDistance`]
+/// (0.1–0.2 measured best on the wing-in-box benchmark, docs/performance.md).
+const WALL_SCALE: f64 = 0.2;
+/// Exponent of [`Stiffness::WallDistance`].
+const WALL_POWER: f64 = 2.0;
+
+/// Distance of every node to the nodes flagged `source`, along grid edges (Dijkstra; ∞ where
+/// unreachable). Deterministic: ties are broken by node index.
+fn edge_distance(adj: &Adjacency, x: &[[f64; 3]], source: &[bool]) -> Vec<f64> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    let n = x.len();
+    let mut d = vec![f64::INFINITY; n];
+    let mut heap = BinaryHeap::new();
+    for i in 0..n {
+        if source[i] {
+            d[i] = 0.0;
+            heap.push(Reverse((0u64, i as u32)));
+        }
+    }
+    while let Some(Reverse((key, i))) = heap.pop() {
+        let i = i as usize;
+        let di = f64::from_bits(key);
+        if di > d[i] {
+            continue;
+        }
+        for &j in adj.neighbours(i) {
+            let j = j as usize;
+            let (a, b) = (x[i], x[j]);
+            let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt();
+            let dj = di + l;
+            if dj < d[j] {
+                d[j] = dj;
+                // Non-negative f64 bit patterns order like the values.
+                heap.push(Reverse((dj.to_bits(), j as u32)));
+            }
+        }
+    }
+    d
+}
+
+fn springs<'a>(
+    mesh: &Mesh,
+    x: &'a [[f64; 3]],
+    kind: Stiffness,
+    adj: &Adjacency,
+    moving: &[bool],
+) -> Springs<'a> {
     let mut vol_factor = Vec::new();
+    let mut wall_len = 0.0;
+    let mut wall_pow = 2.0;
+    if kind == Stiffness::WallDistance {
+        let (scale, power) = (WALL_SCALE, WALL_POWER);
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for (p, &m) in x.iter().zip(moving) {
+            if m {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+        }
+        let diag =
+            ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
+        wall_len = if diag.is_finite() { scale * diag } else { 0.0 };
+        wall_pow = power;
+        vol_factor = edge_distance(adj, x, moving);
+    }
     if kind == Stiffness::Volume {
         let n = x.len();
         let mut sum = vec![0.0; n];
@@ -398,6 +480,8 @@ fn springs<'a>(mesh: &Mesh, x: &'a [[f64; 3]], kind: Stiffness) -> Springs<'a> {
         x,
         kind,
         vol_factor,
+        wall_len,
+        wall_pow,
     }
 }
 
@@ -622,7 +706,15 @@ fn step(
         return Ok(out);
     }
     let t = Instant::now();
-    let sp = springs(mesh, cur, opts.stiffness);
+    let moving: Vec<bool> = if opts.stiffness == Stiffness::WallDistance {
+        cls.roles
+            .iter()
+            .map(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let sp = springs(mesh, cur, opts.stiffness, adj, &moving);
     let a = assemble(sys, adj, &sp);
     times.assemble += t.elapsed().as_secs_f64();
     let t = Instant::now();
