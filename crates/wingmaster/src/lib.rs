@@ -11,7 +11,7 @@
 //! * [`section`]: the section z = z_c(x) ± z_t(x) in the local chord frame of §6.2.
 //! * [`modify`]: Eq. (40), q(t) = q*(t) + Σ (P_i − P_i*) B_i(t) + Σ Q_j B_j(t), applied to
 //!   the original points q* (zero deviation returns q* bit for bit).
-//! * [`fit`]: Levenberg–Marquardt fit on normal distances; [`airfoil`]: Selig/Lednicer files.
+//! * [`fit`](mod@fit): Levenberg–Marquardt fit on normal distances; [`airfoil`]: Selig/Lednicer files.
 //! * [`planform`]: S, AR, span, chords, taper at stations, sweep, dihedral (§6.2), with the
 //!   dependencies resolved explicitly, and linear interpolation of deviations between key
 //!   sections.
