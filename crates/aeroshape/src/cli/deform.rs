@@ -100,6 +100,9 @@ pub enum StiffnessArg {
     InverseLength2,
     /// K = (1 / l²)(mean cell volume / local cell volume).
     Volume,
+    /// K = (1 / l²)(1 + (ℓ / d)²), d the distance to the moving boundary, ℓ = 0.2 × its
+    /// size: a stiff layer around moving bodies.
+    WallDistance,
 }
 
 fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
@@ -277,6 +280,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
             StiffnessArg::InverseLength => Stiffness::InverseLength,
             StiffnessArg::InverseLength2 => Stiffness::InverseLengthSquared,
             StiffnessArg::Volume => Stiffness::Volume,
+            StiffnessArg::WallDistance => Stiffness::WallDistance,
         },
         adapt_rotation: !args.no_rotation,
         rel_tol: args.tolerance,
