@@ -135,6 +135,9 @@ struct Front<'m> {
     inn: Vec<Vec<u32>>,
     buckets: Buckets,
     heap: BinaryHeap<Reverse<(u64, u32)>>,
+    /// Bounding box of the boundary points: the region lies inside it, so a new point outside
+    /// is never valid (this also stops a front that would mesh the outside of its loops).
+    bbox: (P, P),
 }
 
 /// Normalised frame of an edge: y = T (x − origin), T = Lᵀ.
@@ -338,7 +341,13 @@ impl<'m> Front<'m> {
         cands.dedup_by_key(|c| c.1);
         for &(_, c) in &cands {
             let (pcc, yc2) = if c == u32::MAX {
-                if min_node_dist < 0.45 * delta {
+                let (lo, hi) = self.bbox;
+                if min_node_dist < 0.45 * delta
+                    || pc[0] < lo[0]
+                    || pc[0] > hi[0]
+                    || pc[1] < lo[1]
+                    || pc[1] > hi[1]
+                {
                     continue;
                 }
                 (pc, yc)
@@ -475,6 +484,7 @@ pub(crate) fn triangulate(
         inn: Vec::new(),
         buckets: Buckets::new(lo, hi, cell),
         heap: BinaryHeap::new(),
+        bbox: (lo, hi),
     };
     for p in pts {
         fr.add_point(p);

@@ -141,75 +141,89 @@ pub(crate) fn boundary_params(
             .map(|k| k % n)
             .find(|&k| pole[k].is_none() && pole[(k + n - 1) % n].is_none())
             .unwrap_or_else(|| (0..n).find(|&k| pole[k].is_none()).expect("checked"));
+        let walk = |seed: [f64; 2]| -> Result<(Vec<LoopNode>, [f64; 2])> {
+            let mut prev = seed;
+            let mut after_pole: Option<(usize, f64)> = None;
+            let mut nodes = vec![LoopNode::Pole(0, 0); n];
+            for k in 0..n {
+                let i = (start + k) % n;
+                let g = seq[i];
+                if let Some(pi) = pole[i] {
+                    nodes[i] = LoopNode::Pole(g, pi);
+                    after_pole = Some((pi, poles[pi].side.along(prev)));
+                    continue;
+                }
+                let p = coords[g as usize];
+                let f = match after_pole.take() {
+                    None if k == 0 => proj.project_from(&p, seed),
+                    None => {
+                        let mut f = proj.project_from(&p, prev);
+                        if !f.converged || f.distance > tol {
+                            let h = proj.project(&p)?;
+                            if h.distance < f.distance || !f.converged {
+                                f = h;
+                            }
+                        }
+                        f
+                    }
+                    Some((pi, t_arrival)) => {
+                        // feet from seeds along the side; keep the farthest from the arrival
+                        let side = poles[pi].side;
+                        let [a, b] = side.along_range(dom);
+                        let s_range = match side.along_axis() {
+                            1 => dom.0[1] - dom.0[0],
+                            _ => dom.1[1] - dom.1[0],
+                        };
+                        let mut feet: Vec<_> = (0..=8)
+                            .map(|j| {
+                                let t = a + (b - a) * j as f64 / 8.0;
+                                proj.project_from(&p, side.uv(dom, t, 1e-3 * s_range))
+                            })
+                            .filter(|f| f.converged && f.distance <= tol)
+                            .collect();
+                        feet.push(proj.project(&p)?);
+                        feet.into_iter()
+                            .filter(|f| f.distance <= tol)
+                            .max_by(|x, y| {
+                                let dx = (side.along(x.uv) - t_arrival).abs();
+                                let dy = (side.along(y.uv) - t_arrival).abs();
+                                dx.total_cmp(&dy)
+                            })
+                            .ok_or_else(|| fail(g, f64::INFINITY))?
+                    }
+                };
+                if f.distance > tol {
+                    return Err(fail(g, f.distance));
+                }
+                // a pole inside a curve (not at a node) or an undetected degenerate side
+                let d = surf.derivs(f.uv[0], f.uv[1]);
+                let (nu, nv) = (d.du.norm(), d.dv.norm());
+                if nu.min(nv) <= 1e-8 * nu.max(nv) {
+                    return Err(Error::Pole {
+                        component: comp,
+                        name: sc.name.clone(),
+                        node: g as usize,
+                        what: format!(
+                            "a tangent vanishes there (|r_u| = {nu:.3e}, |r_v| = {nv:.3e}) but no side of the parameter rectangle is degenerate"
+                        ),
+                    });
+                }
+                nodes[i] = LoopNode::At(g, f.uv);
+                prev = f.uv;
+            }
+            Ok((nodes, prev))
+        };
+        // the start node from a global projection; if it lies on a seam the global foot may
+        // be on the other side from the one the walk comes back with: then walk again from
+        // the foot seeded at the last node (so the loop closes without a jump)
         let p0 = coords[seq[start] as usize];
         let f0 = proj.project(&p0)?;
-        let mut prev = f0.uv;
-        let mut after_pole: Option<(usize, f64)> = None;
-        let mut nodes = vec![LoopNode::Pole(0, 0); n];
-        for k in 0..n {
-            let i = (start + k) % n;
-            let g = seq[i];
-            if let Some(pi) = pole[i] {
-                nodes[i] = LoopNode::Pole(g, pi);
-                after_pole = Some((pi, poles[pi].side.along(prev)));
-                continue;
-            }
-            let p = coords[g as usize];
-            let f = match after_pole.take() {
-                None => {
-                    let mut f = proj.project_from(&p, prev);
-                    if !f.converged || f.distance > tol {
-                        let h = proj.project(&p)?;
-                        if h.distance < f.distance || !f.converged {
-                            f = h;
-                        }
-                    }
-                    f
-                }
-                Some((pi, t_arrival)) => {
-                    // feet from seeds along the side; keep the farthest from the arrival
-                    let side = poles[pi].side;
-                    let [a, b] = side.along_range(dom);
-                    let s_range = match side.along_axis() {
-                        1 => dom.0[1] - dom.0[0],
-                        _ => dom.1[1] - dom.1[0],
-                    };
-                    let mut feet: Vec<_> = (0..=8)
-                        .map(|j| {
-                            let t = a + (b - a) * j as f64 / 8.0;
-                            proj.project_from(&p, side.uv(dom, t, 1e-3 * s_range))
-                        })
-                        .filter(|f| f.converged && f.distance <= tol)
-                        .collect();
-                    feet.push(proj.project(&p)?);
-                    feet.into_iter()
-                        .filter(|f| f.distance <= tol)
-                        .max_by(|x, y| {
-                            let dx = (side.along(x.uv) - t_arrival).abs();
-                            let dy = (side.along(y.uv) - t_arrival).abs();
-                            dx.total_cmp(&dy)
-                        })
-                        .ok_or_else(|| fail(g, f64::INFINITY))?
-                }
-            };
-            if f.distance > tol {
-                return Err(fail(g, f.distance));
-            }
-            // a pole inside a curve (not at a node) or an undetected degenerate side
-            let d = surf.derivs(f.uv[0], f.uv[1]);
-            let (nu, nv) = (d.du.norm(), d.dv.norm());
-            if nu.min(nv) <= 1e-8 * nu.max(nv) {
-                return Err(Error::Pole {
-                    component: comp,
-                    name: sc.name.clone(),
-                    node: g as usize,
-                    what: format!(
-                        "a tangent vanishes there (|r_u| = {nu:.3e}, |r_v| = {nv:.3e}) but no side of the parameter rectangle is degenerate"
-                    ),
-                });
-            }
-            nodes[i] = LoopNode::At(g, f.uv);
-            prev = f.uv;
+        let (mut nodes, last) = walk(f0.uv)?;
+        let f1 = proj.project_from(&p0, last);
+        let jump = (f1.uv[0] - f0.uv[0]).abs().max((f1.uv[1] - f0.uv[1]).abs());
+        let span = (dom.0[1] - dom.0[0]).max(dom.1[1] - dom.1[0]);
+        if f1.converged && f1.distance <= tol && jump > 1e-6 * span {
+            nodes = walk(f1.uv)?.0;
         }
         out.push(nodes);
     }

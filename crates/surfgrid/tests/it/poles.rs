@@ -90,3 +90,25 @@ fn cylinder_with_caps_is_closed() {
     eprintln!("cylinder: {st:?}");
     assert!(st.frac_min_angle_ge_20 >= 0.99, "{st:?}");
 }
+
+/// Coarse and fine sizes: the cap loops start on the radial seam, whose global foot may be on
+/// either side (h = 0.6 once made the walk jump across the seam), and few boundary nodes
+/// surround the poles.
+#[test]
+fn poles_at_several_sizes() {
+    let db = fixture("cylinder");
+    for h in [0.6, 0.4, 0.3, 0.08] {
+        let field = SizeField::uniform(h).unwrap();
+        let g = generate(&db, &field, &GenerateOptions::default())
+            .unwrap_or_else(|e| panic!("cylinder, h = {h}: {e}"));
+        check_grid(&db, &g, true);
+    }
+    let db = fixture("wing_body");
+    for h in [0.4, 0.25] {
+        let field = wing_body_field(&db, h);
+        let g = generate(&db, &field, &GenerateOptions::default())
+            .unwrap_or_else(|e| panic!("wing-body, h = {h}: {e}"));
+        check_grid(&db, &g, false);
+        assert_eq!(pole_nodes(&db, &g).len(), 4);
+    }
+}
