@@ -252,6 +252,7 @@ fn figures() {
             r.rel_residual
         );
         let t = Instant::now();
+        let c0 = cpu_s();
         let strength = std::env::var("DEFORM_AMG_STRENGTH")
             .ok()
             .and_then(|v| v.parse().ok())
@@ -284,11 +285,17 @@ fn figures() {
         if std::env::var("DEFORM_BENCH_SOLVES_ONLY").is_ok() {
             continue;
         }
-        // Whole deformation.
-        for (name, solver) in [
-            ("multigrid", SolverKind::PcgMultigrid),
-            ("jacobi-pcg", SolverKind::PcgJacobi),
-        ] {
+        // Whole deformation (`DEFORM_BENCH_QUICK`: multigrid only, no naive / numbering runs).
+        let quick = std::env::var("DEFORM_BENCH_QUICK").is_ok();
+        let solvers: &[(&str, SolverKind)] = if quick {
+            &[("multigrid", SolverKind::PcgMultigrid)]
+        } else {
+            &[
+                ("multigrid", SolverKind::PcgMultigrid),
+                ("jacobi-pcg", SolverKind::PcgJacobi),
+            ]
+        };
+        for &(name, solver) in solvers {
             let t = Instant::now();
             let c0 = cpu_s();
             let d = deform(
@@ -322,6 +329,16 @@ fn figures() {
                 r.quality_after.p1,
                 r.quality_after.inverted
             );
+        }
+        if quick {
+            println!(
+                "peak RSS so far: {:.0} MB; load average: {}",
+                peak_rss_mb(),
+                std::fs::read_to_string("/proc/loadavg")
+                    .unwrap_or_default()
+                    .trim()
+            );
+            continue;
         }
         // Without R and with the symmetry plane fixed (the naive setup), for comparison.
         let naive = BoundaryConditions {

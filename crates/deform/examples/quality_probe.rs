@@ -1,6 +1,7 @@
 //! Quality of the wing-in-box case (the benchmark's generator) pitched 5°, for option
 //! variants given in the environment: `N` (cubes per side, default 30), `STIFF` (l, l2,
-//! volume), `ROT` (0/1), `RATIO` (guard's min_quality_ratio, to force increments).
+//! volume, wall), `ROT` (0/1), `RATIO` (guard's min_quality_ratio, to force increments).
+//! `WRITE_SU2=path` writes the case's grid as SU2 instead.
 
 use deform::generate::box_with_block;
 use deform::{BoundaryConditions, DeformOptions, MarkerRole, RigidMotion, Stiffness, deform};
@@ -31,6 +32,13 @@ fn main() {
         ],
         displacements: vec![],
     };
+    if let Ok(path) = std::env::var("WRITE_SU2") {
+        // Write the case's grid (for end-to-end runs of `aeroshape deform`) and stop.
+        let mut f = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+        mesh::io::write(&m, mesh::io::Format::Su2, &mut f).unwrap();
+        println!("wrote {path}: {} nodes", m.n_nodes());
+        return;
+    }
     let stiffness = match env("STIFF", "l2").as_str() {
         "l" => Stiffness::InverseLength,
         "volume" => Stiffness::Volume,

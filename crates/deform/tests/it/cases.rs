@@ -167,7 +167,7 @@ fn adaptation_matrices_keep_near_wall_cells_rigid() {
 }
 
 /// The benchmark case (wing-like block in a box of uniform Kuhn tetrahedra, pitched 5°,
-/// symmetry plane sliding, far field fixed) at 28k nodes: on a uniform grid the volume
+/// symmetry plane sliding, far field fixed) at 15k nodes: on a uniform grid the volume
 /// stiffness changes nothing; the wall-distance stiffness keeps the minimum quality within
 /// 5 % of the initial one and above the 1/l² result (measured at n = 30: wall distance
 /// 97.4 %, 1/l² 95.6 %; at 53k–309k nodes 1/l² falls below 95 %, see docs/performance.md).
