@@ -8,6 +8,12 @@
 //!   (rounded nose, cylinder, tail cone), a wing lofted from a NACA 2412 root and a NACA 0012
 //!   tip with a flat tip cap, and the wing/fuselage junction computed by a small Newton
 //!   solve on the two support surfaces. Open (free edges on the symmetry plane).
+//! * `../cases/default/wing_body.ron`: the same model with the junction in twice as many
+//!   arcs (within ~3e-10 of both surfaces instead of ~5e-8), the geometry of the chain's
+//!   default case.
+//!
+//! Then the chain cases' volume grids (`fixtures/cases/{default,sphere}/grid.msh`, see
+//! [`case_grids`]).
 //!
 //! Every fixture carries control nodes shared along common borders.
 
@@ -48,14 +54,24 @@ struct GridCase {
     groups: &'static [&'static str],
 }
 
-const GRID_CASES: &[GridCase] = &[GridCase {
-    dir: "sphere",
-    geometry: "fixtures/geom/sphere.ron",
-    h_wall: 0.3,
-    h_far: 2.0,
-    bbox: [-5.0, 5.0, 5.0, -5.0, 5.0],
-    groups: &["sphere=0,1,2,3,4,5"],
-}];
+const GRID_CASES: &[GridCase] = &[
+    GridCase {
+        dir: "default",
+        geometry: "fixtures/cases/default/wing_body.ron",
+        h_wall: 0.15,
+        h_far: 4.0,
+        bbox: [-10.0, 22.0, 14.0, -12.0, 12.0],
+        groups: &["fuselage=0", "wing=1,2"],
+    },
+    GridCase {
+        dir: "sphere",
+        geometry: "fixtures/geom/sphere.ron",
+        h_wall: 0.2,
+        h_far: 1.5,
+        bbox: [-5.0, 5.0, 5.0, -5.0, 5.0],
+        groups: &["sphere=0,1,2,3,4,5"],
+    },
+];
 
 /// The volume grids of the chain cases: aeroshape's own surface grid of the geometry
 /// (`surfgrid::generate`, example `chain_fixture surface`), a far-field box filled with
@@ -146,7 +162,8 @@ fn geometry(root: &Path) -> Result<(), String> {
     for (name, db) in [
         ("sphere", sphere),
         ("cylinder", cylinder()?),
-        ("wing_body", wing_body()?),
+        ("wing_body", wing_body(1)?),
+        ("../cases/default/wing_body", wing_body(2)?),
     ] {
         db.validate().map_err(|e| format!("{name}: {e}"))?;
         let report = db.check(&CheckOptions::default());
@@ -614,8 +631,11 @@ fn junction_point(
     Err(format!("junction Newton did not converge at u = {u}"))
 }
 
-/// The wing-body half model (see the module doc).
-pub fn wing_body() -> Result<GeomDb, String> {
+/// The wing-body half model (see the module doc) with `split` junction arcs per chordwise
+/// wing patch (1 for `fixtures/geom/wing_body.ron`, whose curve parameter ranges other
+/// crates' tests rely on; 2 for the chain's default case,
+/// `fixtures/cases/default/wing_body.ron`).
+pub fn wing_body(split: usize) -> Result<GeomDb, String> {
     const DEG: usize = 8;
     let len = NOSE + MID + TAIL;
     let mut b = Builder::new("wing-body half model", len);
@@ -696,22 +716,37 @@ pub fn wing_body() -> Result<GeomDb, String> {
         .collect();
     let cap = SupportSurface::new("tip cap", 2, 1, cap_patches);
 
-    // junction: one support curve with 4 arcs following the wing's chordwise patches
+    // junction: one support curve following the wing's chordwise patches, `split` arcs of
+    // degree 8 per patch (with one arc per patch the curve leaves the surfaces by ~5e-8
+    // between control points; with two, ~3e-10: see `cargo xtask fixtures`'s printout)
     let mut arcs = Vec::new();
     let mut v_te = 0.0;
-    for i in 0..4 {
+    let sf = split as f64;
+    for k in 0..4 * split {
         let mut pts = Vec::new();
         for &x in geom_db::control::nodes(DEG) {
-            let (v, p) = junction_point(&wing, &fus, i as f64 + x, tol)?;
-            if i == 0 && x == 0.0 {
+            let (v, p) = junction_point(&wing, &fus, (k as f64 + x) / sf, tol)?;
+            if k == 0 && x == 0.0 {
                 v_te = v;
             }
             pts.push(p);
         }
         arcs.push(Arc::from_control_points(&pts));
     }
+    let mut dev: f64 = 0.0;
+    for (k, a) in arcs.iter().enumerate() {
+        for i in 0..=100 {
+            let x = i as f64 / 100.0;
+            let (_, p) = junction_point(&wing, &fus, (k as f64 + x) / sf, tol)?;
+            dev = dev.max((a.point(x) - p).norm());
+        }
+    }
+    eprintln!(
+        "wing_body ({split} junction arc(s) per wing patch): junction within {dev:.2e} ({:.2e} of the fuselage length) of the exact intersection",
+        dev / len
+    );
     let te_j = arcs[0].point(0.0);
-    let le_j = arcs[2].point(0.0);
+    let le_j = arcs[2 * split].point(0.0);
 
     let s_fus = b.surface(fus);
     let s_wing = b.surface(wing);
@@ -758,8 +793,9 @@ pub fn wing_body() -> Result<GeomDb, String> {
     let k_tip = b.curve(tipc);
 
     // curve components
-    let jl = b.component("junction lower", k_junction, 0.0, 2.0, c_te_j, c_le_j);
-    let ju = b.component("junction upper", k_junction, 2.0, 4.0, c_le_j, c_te_j);
+    let (t_le, t_te) = (2.0 * sf, 4.0 * sf);
+    let jl = b.component("junction lower", k_junction, 0.0, t_le, c_te_j, c_le_j);
+    let ju = b.component("junction upper", k_junction, t_le, t_te, c_le_j, c_te_j);
     let cb = b.component("fuselage bottom", k_bottom, 0.0, 3.0, nose, tail);
     let ct = b.component("fuselage top", k_top, 0.0, 3.0, nose, tail);
     let cte = b.component("trailing edge", k_te, v_te, 1.0, c_te_j, c_te_t);

@@ -12,7 +12,8 @@
 //!    moved in its parametric plane (`surfgrid::update`);
 //! 4. **volume deformation** (§4): the spring analogy (Eqs. 14–26) with the wall nodes'
 //!    displacements prescribed, the `slide` markers sliding on their planes and the `fixed`
-//!    (and unnamed) markers fixed (`deform`).
+//!    (and unnamed) markers fixed (`deform`); a node of a `fixed` marker that also lies on a
+//!    sliding marker (e.g. the far-field box edge on the symmetry plane) stays fixed.
 //!
 //! Built once in [`Study::new`] and reused by every evaluation: the geometry and its curve
 //! seeds for the update, the bound parametrisation, the baseline grid and its classification
@@ -256,6 +257,7 @@ pub struct Study {
     grid: Mesh,
     surface: SurfaceGrid,
     wall: Vec<bool>,
+    fixed_nodes: Vec<u32>,
     quality: Vec<f64>,
     setup: SetupReport,
 }
@@ -451,6 +453,15 @@ impl Study {
             .iter()
             .map(|s| !matches!(s, NodeSupport::Free))
             .collect();
+        let mut fixed_nodes: Vec<u32> = case
+            .fixed
+            .iter()
+            .filter_map(|m| grid.marker(m))
+            .flat_map(|m| m.elements.node_set())
+            .filter(|&v| !wall[v as usize])
+            .collect();
+        fixed_nodes.sort_unstable();
+        fixed_nodes.dedup();
         let setup = SetupReport {
             read,
             param: t_param,
@@ -470,6 +481,7 @@ impl Study {
             grid,
             surface,
             wall,
+            fixed_nodes,
             quality,
             setup,
         })
@@ -619,6 +631,11 @@ impl Study {
         }
         let mut grid = self.grid.clone();
         let deform_phase = if any {
+            // nodes of `fixed` markers are held even where they touch a sliding marker
+            // (a prescribed zero displacement takes precedence over sliding in `deform`)
+            for &v in &self.fixed_nodes {
+                displacements.push((v, [0.0; 3]));
+            }
             let bc = deform::BoundaryConditions {
                 markers: self
                     .case

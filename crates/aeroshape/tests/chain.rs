@@ -1,8 +1,10 @@
-//! End-to-end tests of the chain (`aeroshape::Study`) on the small committed case
-//! `fixtures/cases/sphere` (cube sphere in a far-field box, ~2k nodes): the identity of the
-//! zero perturbation, a design vector that moves the wall (no inverted cell, wall nodes on
-//! their supports, curves on both adjacent surfaces, checked by independent projections on
-//! the updated geometry) and the absence of state carried between evaluations.
+//! End-to-end tests of the chain (`aeroshape::Study`) on the committed cases
+//! `fixtures/cases/sphere` (cube sphere in a far-field box, 1.4k nodes) and
+//! `fixtures/cases/default` (the wing-body half model with its symmetry plane, 4.2k nodes):
+//! the identity of the zero perturbation, the case's design vector (no inverted cell, wall
+//! nodes on their supports, curve nodes — the wing/body junction — on both adjacent
+//! surfaces, checked by independent projections on the updated geometry) and the absence
+//! of state carried between evaluations.
 
 use std::path::{Path, PathBuf};
 
@@ -65,9 +67,17 @@ fn support_distances(db: &GeomDb, coords: &[[f64; 3]], support: &[NodeSupport]) 
     (surf, curve)
 }
 
+const CASES: [&str; 2] = ["sphere", "default"];
+
 #[test]
 fn zero_design_vector_gives_the_baseline_bit_for_bit() {
-    let (s, _) = study("sphere");
+    for case in CASES {
+        zero_design_vector(case);
+    }
+}
+
+fn zero_design_vector(case: &str) {
+    let (s, _) = study(case);
     let ev = s.evaluate(&s.initial()).unwrap();
     assert_eq!(ev.grid.coords, s.baseline().coords);
     assert_eq!(ev.grid.cells, s.baseline().cells);
@@ -77,12 +87,18 @@ fn zero_design_vector_gives_the_baseline_bit_for_bit() {
 
 #[test]
 fn design_vector_moves_the_wall_onto_the_new_geometry() {
-    let (s, x) = study("sphere");
+    for case in CASES {
+        design_vector(case);
+    }
+}
+
+fn design_vector(case: &str) {
+    let (s, x) = study(case);
     let ev = s.evaluate(&x).unwrap();
     let r = &ev.report;
     assert!(r.param.nodes_moved > 0 && r.surface.moved_nodes > 0);
     assert!(!r.deform.skipped && r.deform.iterations > 0);
-    assert_eq!(r.quality_after.inverted, 0, "{r:#?}");
+    assert_eq!(r.quality_after.inverted, 0, "{case}: {r:#?}");
     // the wall moved by a visible amount
     let moved = ev
         .grid
@@ -93,7 +109,7 @@ fn design_vector_moves_the_wall_onto_the_new_geometry() {
             ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
         })
         .fold(0.0, f64::max);
-    assert!(moved > 1e-2, "largest node motion {moved}");
+    assert!(moved > 1e-2, "{case}: largest node motion {moved}");
     // wall nodes on their supports, curve nodes on both adjacent surfaces
     let (surf, curve) = support_distances(&ev.geometry, &ev.grid.coords, &ev.surface.support);
     assert!(
@@ -104,6 +120,17 @@ fn design_vector_moves_the_wall_onto_the_new_geometry() {
         curve <= 1e-8,
         "curve node off an adjacent surface by {curve:e} (relative)"
     );
+    // symmetry-plane nodes stayed in the plane y = 0
+    if let Some(m) = s.baseline().marker("symmetry") {
+        let lref = ev.geometry.reference_length();
+        for v in m.elements.node_set() {
+            let (a, b) = (ev.grid.coords[v as usize], s.baseline().coords[v as usize]);
+            assert!(
+                (a[1] - b[1]).abs() <= 1e-9 * lref,
+                "{case}: node {v} left the symmetry plane: {a:?}"
+            );
+        }
+    }
     // the far field did not move
     let ff = s.baseline().marker("farfield").unwrap().elements.node_set();
     for v in ff {
@@ -113,7 +140,7 @@ fn design_vector_moves_the_wall_onto_the_new_geometry() {
 
 #[test]
 fn no_state_leaks_between_evaluations() {
-    let (s, x) = study("sphere");
+    let (s, x) = study("default");
     let a = s.evaluate(&x).unwrap();
     let zero = s.evaluate(&s.initial()).unwrap();
     assert_eq!(zero.grid.coords, s.baseline().coords);
