@@ -1,4 +1,4 @@
-//! `aeroshape geom info|check` end to end: exit codes, messages naming the entity, JSON.
+//! `aeroshape geom info|check|import` end to end: exit codes, messages naming the entity, JSON.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -144,4 +144,54 @@ fn missing_file_and_usage_errors() {
     let o = bin().args(["geom", "--help"]).output().unwrap();
     assert_eq!(o.status.code(), Some(0));
     assert!(stdout(&o).contains("info") && stdout(&o).contains("check"));
+}
+
+/// The "done when": import the real M6 file, check it, read the report.
+#[test]
+fn import_m6_then_check() {
+    let igs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/iges/geom_oneram6.igs");
+    let dir = tempfile::tempdir().unwrap();
+    let ron = dir.path().join("m6.ron");
+    let json = dir.path().join("m6.json");
+    let o = bin()
+        .args(["geom", "import"])
+        .arg(&igs)
+        .arg("-o")
+        .arg(&ron)
+        .arg("--report")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("faces: 2 farfield, 1 symmetry, 4 wing"),
+        "{}",
+        stdout(&o)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert!(r["max_error"].as_f64().unwrap() <= r["tolerance"].as_f64().unwrap());
+    let o = run(&["geom", "check"], &ron);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stdout(&o).contains("closed"), "{}", stdout(&o));
+    // Nothing but the two outputs was left in the folder.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}
+
+#[test]
+fn truncated_iges_is_one_line_error() {
+    let igs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/iges/geom_oneram6.igs");
+    let text = std::fs::read(&igs).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("cut.igs");
+    std::fs::write(&bad, &text[..text.len() / 2]).unwrap();
+    let out = dir.path().join("cut.ron");
+    let o = bin()
+        .args(["geom", "import"])
+        .arg(&bad)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_one_line_error(&o, "cut.igs");
+    assert!(!out.exists());
 }

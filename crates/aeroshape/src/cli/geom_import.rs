@@ -99,6 +99,12 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
             s.volume
         );
     }
+    let mut roles: std::collections::BTreeMap<&str, usize> = Default::default();
+    for f in &report.faces {
+        *roles.entry(f.role.as_str()).or_default() += 1;
+    }
+    let roles: Vec<String> = roles.iter().map(|(r, n)| format!("{n} {r}")).collect();
+    println!("  faces: {}", roles.join(", "));
     for w in &report.warnings {
         println!("  warning: {w}");
     }

@@ -22,6 +22,8 @@
 //!   with Green's theorem in each face's parameter plane, is negative for the largest shell
 //!   (the far field: normals point into the fluid it encloses) and positive for the others
 //!   (bodies: normals point away from them). [`ImportOptions::flip`] reverses everything.
+//! * Roles ([`recognise`]): each face is recognised as a symmetry plane, the far field, or
+//!   part of a wing or another body, and its surface component named `<role>.D<line>`.
 //! * The way back ([`to_iges`]): support surfaces as 114 (bicubic or lower) or 128, surface
 //!   components as 144 trimmed surfaces with 142 boundaries over 112/126 model curves.
 
@@ -31,6 +33,7 @@
 mod approx;
 mod export;
 mod geometry;
+mod roles;
 #[cfg(test)]
 mod tests;
 mod topo;
@@ -38,6 +41,7 @@ mod topo;
 use serde::Serialize;
 
 pub use export::to_iges;
+pub use roles::{FaceRole, recognise};
 pub use topo::import;
 
 /// Errors of the IGES import. Every message is one line naming the file and, where there is
@@ -163,6 +167,9 @@ pub struct FaceReport {
     pub inward: &'static str,
     /// Index of the shell (connected set of faces) it belongs to.
     pub shell: usize,
+    /// What the face is ([`FaceRole::name`]): `symmetry`, `farfield`, `wing`, `body`, …
+    /// The surface component is named `<role>.D<line>` (e.g. `wing.D31`).
+    pub role: String,
 }
 
 /// A connected set of faces.

@@ -245,6 +245,22 @@ fn m6_is_imported_sewn_and_closed() {
             }
         }
     }
+    // Roles: the far field is exactly the faces on the spheres (surfaces of revolution,
+    // type 120), the symmetry plane the face with the root hole (in y = 0), the wing the rest.
+    for (f, c) in rep.faces.iter().zip(&db.surface_components) {
+        let on_sphere = db.surface(c.surface).name.ends_with("(120)");
+        let expected = match (on_sphere, f.loops) {
+            (true, _) => "farfield",
+            (false, 2) => "symmetry",
+            _ => "wing",
+        };
+        assert_eq!(f.role, expected, "{f:?}");
+        assert_eq!(c.name, format!("{expected}.D{}", f.de));
+    }
+    assert_eq!(
+        crate::import::recognise(&db, rep.sew_tolerance)[2],
+        crate::import::FaceRole::Symmetry { axis: 1 }
+    );
     // geom check: closed, every trimming curve on its surface, no gap above tolerance.
     let check = db.check(&Default::default());
     assert!(check.topology.closed, "{:?}", check.topology);
@@ -273,7 +289,7 @@ fn m6_wing_root_curve_is_shared_with_the_symmetry_plane() {
         .map(|s| s.name.as_str())
         .collect();
     assert_eq!(users.len(), 2, "{users:?}");
-    assert!(users.contains(&"D103 (144)"), "{users:?}");
+    assert!(users.contains(&"symmetry.D103"), "{users:?}");
     let c = db.curve(db.curve_components[comp].curve);
     assert_eq!(c.arcs.len(), 55);
 }

@@ -7,6 +7,7 @@ use iges::{DeId, Entity, IgesFile};
 
 use super::approx::{fit_curve, fit_surface};
 use super::geometry::{Builder, SurfEval};
+use super::roles;
 use super::{
     EdgeReport, EntityConversion, Error, FaceReport, ImportOptions, ImportReport, ShellReport,
 };
@@ -1145,8 +1146,13 @@ pub fn import(file: &IgesFile, opts: &ImportOptions) -> Result<(GeomDb, ImportRe
             }
         }
     }
+    let roles = roles::recognise(&db, rep.sew_tolerance);
+    for (fi, (c, r)) in db.surface_components.iter_mut().zip(&roles).enumerate() {
+        c.name = format!("{}.D{}", r.name().replace(' ', ""), faces[fi].de.line());
+    }
     for (fi, c) in db.surface_components.iter().enumerate() {
         rep.faces.push(FaceReport {
+            role: roles[fi].name(),
             de: faces[fi].de.line(),
             entity_type: file.get(faces[fi].de).map_or(0, |r| r.de.entity_type),
             surface_de: faces[fi].surface.line(),
