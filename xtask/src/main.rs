@@ -24,7 +24,7 @@ fn main() -> ExitCode {
         Some("bench") => bench::run(&root(), &args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check crate layering and file headers\n  fixtures [--geometry-only]  write the geometry fixtures (fixtures/geom/) and the chain cases' volume grids (needs pip gmsh)\n  chain  run the default case (fixtures/cases/default) into target/chain/ and print a summary\n  regress [--bless]  chain cases against fixtures/reference/, ignored tests, meshio/Gmsh round trips\n  bench [--quick] [CRATE]...  criterion benchmarks of the crates, summary in target/bench/summary.md"
+                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check crate layering and file headers\n  fixtures [--geometry-only]  write the geometry fixtures (fixtures/geom/) and the chain cases' volume grids (needs pip gmsh)\n  chain  run the default case (fixtures/cases/default) into target/chain/ and print a summary\n  regress [--bless] [--skip-ignored-tests]  chain cases against fixtures/reference/, ignored tests, meshio/Gmsh round trips\n  bench [--quick] [CRATE]...  criterion benchmarks of the crates, summary in target/bench/summary.md"
             );
             return ExitCode::from(2);
         }
