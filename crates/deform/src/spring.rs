@@ -343,8 +343,6 @@ struct Springs<'a> {
     vol_factor: Vec<f64>,
     /// ℓ of [`Stiffness::WallDistance`].
     wall_len: f64,
-    /// p of [`Stiffness::WallDistance`].
-    wall_pow: f64,
 }
 
 impl Springs<'_> {
@@ -359,7 +357,8 @@ impl Springs<'_> {
             Stiffness::WallDistance => {
                 // Distance of the edge's midpoint, ≥ l / 2 next to the wall.
                 let d = 0.5 * (self.vol_factor[i] + self.vol_factor[j]);
-                (1.0 + (self.wall_len / d).powf(self.wall_pow)) / l2
+                let r = self.wall_len / d;
+                (1.0 + r * r) / l2
             }
         }
     }
@@ -368,8 +367,6 @@ impl Springs<'_> {
 /// ℓ / (diagonal of the moving boundary's bounding box) of [`Stiffness::WallDistance`]
 /// (0.1–0.2 measured best on the wing-in-box benchmark, docs/performance.md).
 const WALL_SCALE: f64 = 0.2;
-/// Exponent of [`Stiffness::WallDistance`].
-const WALL_POWER: f64 = 2.0;
 
 /// Distance of every node to the nodes flagged `source`, along grid edges (Dijkstra; ∞ where
 /// unreachable). Deterministic: ties are broken by node index.
@@ -415,9 +412,8 @@ fn springs<'a>(
 ) -> Springs<'a> {
     let mut vol_factor = Vec::new();
     let mut wall_len = 0.0;
-    let mut wall_pow = 2.0;
     if kind == Stiffness::WallDistance {
-        let (scale, power) = (WALL_SCALE, WALL_POWER);
+        let scale = WALL_SCALE;
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for (p, &m) in x.iter().zip(moving) {
@@ -431,7 +427,6 @@ fn springs<'a>(
         let diag =
             ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
         wall_len = if diag.is_finite() { scale * diag } else { 0.0 };
-        wall_pow = power;
         vol_factor = edge_distance(adj, x, moving);
     }
     if kind == Stiffness::Volume {
@@ -481,7 +476,6 @@ fn springs<'a>(
         kind,
         vol_factor,
         wall_len,
-        wall_pow,
     }
 }
 
