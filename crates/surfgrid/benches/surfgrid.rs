@@ -1,5 +1,6 @@
-//! Benchmarks: generation of the wing of the wing-body fixture (triangles per second), the
-//! update at frozen parameters (nodes per second) and the re-map after a fuselage change.
+//! Benchmarks: generation of the whole wing-body fixture (fuselage with its nose and tail
+//! poles, wing, tip cap) and of its wing alone (triangles per second), the update at frozen
+//! parameters (nodes per second) and the re-map after a fuselage change.
 
 use std::hint::black_box;
 
@@ -17,12 +18,15 @@ fn fixture(name: &str) -> GeomDb {
     GeomDb::from_ron_str(&std::fs::read_to_string(&path).unwrap(), &path).unwrap()
 }
 
-fn wing_field(h: f64) -> SizeField {
+/// Uniform `h` and a line source of h/7.5 along the wing's leading edge (between the corners
+/// named "junction leading edge" and "tip leading edge").
+fn wing_field(db: &GeomDb, h: f64) -> SizeField {
+    let corner = |name: &str| db.corners.iter().find(|c| c.name == name).unwrap().point;
     SizeField::uniform(h)
         .unwrap()
         .with_line(LineSource {
-            a: Point3::new(3.0, 0.0, -0.1),
-            b: Point3::new(3.0 + 5.0 * 25f64.to_radians().tan(), 5.0, 0.15),
+            a: corner("junction leading edge"),
+            b: corner("tip leading edge"),
             h0: h / 7.5,
             r0: 0.02,
             growth: Growth::Smoothstep { radius: 0.4 },
@@ -39,10 +43,26 @@ fn bench(c: &mut Criterion) {
             .unwrap() as u32,
     );
     let opts = GenerateOptions::default().with_components(vec![wing]);
-    let field = wing_field(0.05);
+    let field = wing_field(&db, 0.05);
     let g = generate(&db, &field, &opts).unwrap();
     let st = grid_stats(&g, &field);
     eprintln!("wing h = 0.05: {} nodes, {st:?}", g.n_nodes());
+    let all = GenerateOptions::default();
+    let gw = generate(&db, &field, &all).unwrap();
+    eprintln!(
+        "wing-body h = 0.05: {} nodes, {:?}",
+        gw.n_nodes(),
+        grid_stats(&gw, &field)
+    );
+    for c in &gw.components {
+        let one = surfgrid::SurfaceGrid {
+            coords: gw.coords.clone(),
+            support: gw.support.clone(),
+            curve_nodes: gw.curve_nodes.clone(),
+            components: vec![c.clone()],
+        };
+        eprintln!("  {}: {:?}", c.comp, grid_stats(&one, &field));
+    }
     let sphere = fixture("sphere");
     let sf = SizeField::uniform(0.05).unwrap();
     let gs = generate(&sphere, &sf, &GenerateOptions::default()).unwrap();
@@ -54,6 +74,10 @@ fn bench(c: &mut Criterion) {
 
     let mut grp = c.benchmark_group("generate");
     grp.sample_size(10);
+    grp.throughput(Throughput::Elements(gw.n_triangles() as u64));
+    grp.bench_function("wing_body_h0.05", |b| {
+        b.iter(|| generate(black_box(&db), &field, &all).unwrap())
+    });
     grp.throughput(Throughput::Elements(g.n_triangles() as u64));
     grp.bench_function("wing_h0.05", |b| {
         b.iter(|| generate(black_box(&db), &field, &opts).unwrap())
@@ -65,6 +89,10 @@ fn bench(c: &mut Criterion) {
     grp.finish();
 
     let mut grp = c.benchmark_group("frozen");
+    grp.throughput(Throughput::Elements(gw.n_nodes() as u64));
+    grp.bench_function("wing_body_h0.05", |b| {
+        b.iter(|| evaluate_frozen(black_box(&gw), &db))
+    });
     grp.throughput(Throughput::Elements(g.n_nodes() as u64));
     grp.bench_function("wing_h0.05", |b| {
         b.iter(|| evaluate_frozen(black_box(&g), &db))
@@ -91,8 +119,14 @@ fn bench(c: &mut Criterion) {
     let (new, _) =
         intersect::update::update_model(&db, &pts, &intersect::update::UpdateOptions::default())
             .unwrap();
+    let (_, rep) = surfgrid::update(&gw, &db, &new, &UpdateOptions::default()).unwrap();
+    eprintln!("wing-body update, fuselage +5 %: {rep:?}");
     let mut grp = c.benchmark_group("update");
     grp.sample_size(10);
+    grp.throughput(Throughput::Elements(gw.n_nodes() as u64));
+    grp.bench_function("wing_body_fuselage_plus5pct", |b| {
+        b.iter(|| surfgrid::update(black_box(&gw), &db, &new, &UpdateOptions::default()).unwrap())
+    });
     grp.throughput(Throughput::Elements(g.n_nodes() as u64));
     grp.bench_function("wing_fuselage_plus5pct", |b| {
         b.iter(|| surfgrid::update(black_box(&g), &db, &new, &UpdateOptions::default()).unwrap())

@@ -469,7 +469,40 @@ fn mesh_component(
     Ok(g)
 }
 
-/// Discretises the curves of the selected components and triangulates each component.
+/// The surface grid of a whole model (or of the components `opts` selects): the public
+/// entry point of generation (stable).
+///
+/// Curves first: every curve component used by a selected surface component is discretised
+/// once to the size `field` (equidistribution, so neighbouring components share their curve
+/// nodes and conform); then every surface component is triangulated (in parallel, the result
+/// independent of the thread count) by advancing front in its parametric plane under the
+/// metric M = Jᵀ T J (Eq. 33), with fans at its poles (degenerate sides: a fuselage nose and
+/// tail, a cap centre, a tip cap's ends; see [`crate::pole`]), then swaps and smoothing.
+///
+/// The result ties every node to the geometry: corners ([`NodeSupport::Corner`], poles
+/// included), curve nodes with t, surface nodes with (u, v); every triangle is positively
+/// oriented with respect to its component's inward normal. Write it with
+/// [`SurfaceGrid::to_mesh`] (one marker per surface component, named after it; MSH 4.1
+/// with parametric nodes, SU2 or VTU through `mesh`), move it with the model with
+/// [`crate::update`] (at frozen parameters, re-map where a junction moved), and tie a grid
+/// made elsewhere from it (e.g. the wall of a volume grid built on it) with
+/// [`crate::classify`].
+///
+/// ```no_run
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let text = std::fs::read_to_string("fixtures/geom/wing_body.ron")?;
+/// let db = geom_db::GeomDb::from_ron_str(&text, "wing_body.ron")?;
+/// let field = surfgrid::SizeField::uniform(0.1)?;
+/// let grid = surfgrid::generate(&db, &field, &surfgrid::GenerateOptions::default())?;
+/// let mesh = grid.to_mesh(&db);
+/// let mut out = std::fs::File::create("wing_body.msh")?;
+/// mesh::msh::write(&mesh, mesh::msh::Encoding::Binary, &mut out)?;
+/// # Ok(())
+/// # }
+/// ```
+///
+/// Errors name the component (and node): a curve that cannot be discretised, a boundary node
+/// off its surface, inconsistent loops, an unsupported pole, a front that cannot be closed.
 pub fn generate(db: &GeomDb, field: &SizeField, opts: &GenerateOptions) -> Result<SurfaceGrid> {
     let comps: Vec<SurfCompId> = match &opts.components {
         Some(c) => c.clone(),
