@@ -78,6 +78,10 @@ pub struct Case {
     /// Options of the surface-grid classification and update (paper §3.3).
     #[serde(default)]
     pub surface_grid: SurfaceGridSettings,
+    /// Wing masters (§6, `wingmaster::WingMasterSpec`) by name: a master modifier whose
+    /// source is `External("name")` is driven by the wing master of that name.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub wing_masters: std::collections::BTreeMap<String, wingmaster::WingMasterSpec>,
 }
 
 /// Spring stiffness choice of the case file (see `deform::Stiffness`).

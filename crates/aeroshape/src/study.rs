@@ -418,9 +418,18 @@ impl Study {
         let read = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
+        let masters = if case.wing_masters.is_empty() {
+            MasterSources::new()
+        } else {
+            wingmaster::master::master_sources(&db, &case.parametrisation, &case.wing_masters)
+                .map_err(|e| StudyError::Setup {
+                    path: shown.clone(),
+                    message: format!("wing masters: {e}"),
+                })?
+        };
         let prepared = case
             .parametrisation
-            .bind(&db, &MasterSources::new())
+            .bind(&db, &masters)
             .map_err(|e| StudyError::Setup {
                 path: shown.clone(),
                 message: format!("parametrisation: {e}"),

@@ -22,9 +22,13 @@ fn case_dir(name: &str) -> PathBuf {
 }
 
 fn study(name: &str) -> (Study, Vec<f64>) {
+    study_files(name, "case.ron", "dv.ron")
+}
+
+fn study_files(name: &str, case: &str, dv: &str) -> (Study, Vec<f64>) {
     let dir = case_dir(name);
-    let s = Study::load(&dir.join("case.ron")).expect("study builds");
-    let dv = load_design_values(&dir.join("dv.ron")).expect("dv.ron");
+    let s = Study::load(&dir.join(case)).expect("study builds");
+    let dv = load_design_values(&dir.join(dv)).expect("dv.ron");
     let x = s.vector_from_values(&dv).expect("design vector");
     (s, x)
 }
@@ -92,9 +96,19 @@ fn design_vector_moves_the_wall_onto_the_new_geometry() {
     }
 }
 
+#[test]
+fn wing_master_case_moves_the_wing_onto_the_new_geometry() {
+    let (s, x) = study_files("default", "case_wingmaster.ron", "dv_wingmaster.ron");
+    check_design_vector("default (wing master)", &s, &x);
+}
+
 fn design_vector(case: &str) {
     let (s, x) = study(case);
-    let ev = s.evaluate(&x).unwrap();
+    check_design_vector(case, &s, &x);
+}
+
+fn check_design_vector(case: &str, s: &Study, x: &[f64]) {
+    let ev = s.evaluate(x).unwrap();
     let r = &ev.report;
     assert!(r.param.nodes_moved > 0 && r.surface.moved_nodes > 0);
     assert!(!r.deform.skipped && r.deform.iterations > 0);
