@@ -37,6 +37,33 @@ pub struct GenerateArgs {
     /// Mesh only these surface components (by index; repeatable). Default: all.
     #[arg(long = "component", value_name = "K")]
     pub components: Vec<u32>,
+    /// A line source refining the size near a segment (repeatable): nine comma-separated
+    /// numbers x0,y0,z0,x1,y1,z1,H0,R0,R — size H0 within R0 of the segment, growing to the
+    /// uniform size over R further (smoothstep). E.g. along a wing's leading edge.
+    #[arg(long = "line-source", value_name = "X0,Y0,Z0,X1,Y1,Z1,H0,R0,R")]
+    pub line_sources: Vec<String>,
+}
+
+/// Parses `--line-source` text: nine comma-separated numbers.
+fn line_source(text: &str) -> anyhow::Result<surfgrid::spacing::LineSource> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--line-source {text:?}: not a list of numbers"))?;
+    if v.len() != 9 {
+        bail!(
+            "--line-source {text:?}: expected 9 numbers (x0,y0,z0,x1,y1,z1,h0,r0,r), got {}",
+            v.len()
+        );
+    }
+    Ok(surfgrid::spacing::LineSource {
+        a: geom_db::prelude::Point3::new(v[0], v[1], v[2]),
+        b: geom_db::prelude::Point3::new(v[3], v[4], v[5]),
+        h0: v[6],
+        r0: v[7],
+        growth: surfgrid::spacing::Growth::Smoothstep { radius: v[8] },
+    })
 }
 
 /// Arguments of `aeroshape surfgrid classify`.
@@ -76,7 +103,10 @@ fn generate(a: &GenerateArgs) -> anyhow::Result<()> {
     let format = format_of(&a.output)?;
     aeroshape::fsio::ensure_not_input(&a.output, &[&a.geom]).map_err(anyhow::Error::msg)?;
     let db = super::geom::load(&a.geom)?;
-    let field = SizeField::uniform(a.size)?;
+    let mut field = SizeField::uniform(a.size)?;
+    for l in &a.line_sources {
+        field = field.with_line(line_source(l)?)?;
+    }
     let mut opts = GenerateOptions::default();
     if !a.components.is_empty() {
         opts = opts.with_components(a.components.iter().map(|&k| SurfCompId(k)).collect());
