@@ -39,19 +39,7 @@ where
         path: path.to_path_buf(),
         source,
     };
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".part")
-        .tempfile_in(&dir)
-        .map_err(wrap)?;
+    let tmp = temp_beside(path).map_err(wrap)?;
     {
         let mut w = BufWriter::new(tmp.as_file());
         fill(&mut w).map_err(wrap)?;
@@ -60,6 +48,35 @@ where
     tmp.as_file().sync_all().map_err(wrap)?;
     tmp.persist(path).map_err(|e| wrap(e.error))?;
     Ok(())
+}
+
+/// A new temporary file beside `path` (same folder, so the final rename stays on one file
+/// system; hidden name `.<name>.<random>.part.<ext>`), created with the permissions of a normally
+/// created file (0666 less the umask on Unix; tempfile's default 0600 would leave outputs
+/// unreadable to the rest of a team).
+pub fn temp_beside(path: &Path) -> io::Result<tempfile::NamedTempFile> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    // Keep the extension last: some writers (image encoders) choose the format from it.
+    let suffix = match path.extension() {
+        Some(e) => format!(".part.{}", e.to_string_lossy()),
+        None => ".part".to_string(),
+    };
+    let prefix = format!(".{name}.");
+    let mut b = tempfile::Builder::new();
+    b.prefix(&prefix).suffix(&suffix);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        b.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    b.tempfile_in(&dir)
 }
 
 /// Refuses an output path that names one of the inputs (inputs are never modified).
@@ -105,5 +122,18 @@ mod tests {
         assert!(r.is_err());
         assert_eq!(fs::read_to_string(&p).unwrap(), "new");
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn outputs_get_the_permissions_of_a_normally_created_file() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let plain = dir.path().join("plain.txt");
+        fs::write(&plain, "x").unwrap();
+        let atomic = dir.path().join("atomic.txt");
+        write_atomic(&atomic, |w| w.write_all(b"x")).unwrap();
+        let mode = |p: &Path| fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&atomic), mode(&plain));
     }
 }

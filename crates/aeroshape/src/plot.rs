@@ -314,14 +314,7 @@ impl Plot {
 pub fn write_stack(path: &Path, plots: &[Plot]) -> Result<()> {
     register_font();
     anyhow::ensure!(!plots.is_empty(), "{}: nothing to plot", path.display());
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let tmp = tempfile::Builder::new()
-        .prefix(".plot.")
-        .suffix(".png")
-        .tempfile_in(&dir)
+    let tmp = crate::fsio::temp_beside(path)
         .with_context(|| format!("{}: cannot create a temporary file", path.display()))?;
     let w = plots.iter().map(|p| p.size.0).max().unwrap_or(800);
     let h: u32 = plots.iter().map(|p| p.size.1).sum();
@@ -416,34 +409,52 @@ fn wing_samples(db: &GeomDb, surfaces: &[SurfaceId]) -> Result<Vec<Point3>> {
     Ok(pts)
 }
 
-/// The planform outline of sampled points: per spanwise (y) bin, the smallest and largest x
-/// (leading and trailing edges), as one closed polyline in the (y, x) plane.
+/// The planform outline of sampled points: per spanwise station, the smallest and largest x
+/// (leading and trailing edges), as one closed polyline in the (y, x) plane. Stations are the
+/// clusters of points whose y values follow each other within 1e-6 of the span (a wing
+/// sampled along its spanwise parameter lines: one cluster per line, whatever the round-off);
+/// when that gives too many stations (sections not at constant y), the span is cut into
+/// `BINS` equal bins instead.
 fn planform_outline(pts: &[Point3]) -> Vec<(f64, f64)> {
     const BINS: usize = 60;
-    let (y0, y1) = pts
+    const MAX_STATIONS: usize = 400;
+    let mut sorted: Vec<&Point3> = pts
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-            (a.min(p.y), b.max(p.y))
-        });
+        .filter(|p| p.x.is_finite() && p.y.is_finite())
+        .collect();
+    sorted.sort_by(|a, b| a.y.total_cmp(&b.y));
+    let (Some(first), Some(last)) = (sorted.first(), sorted.last()) else {
+        return Vec::new();
+    };
+    let (y0, y1) = (first.y, last.y);
     if y1.partial_cmp(&y0) != Some(std::cmp::Ordering::Greater) {
         return Vec::new();
     }
-    let mut lo = [f64::INFINITY; BINS];
-    let mut hi = [f64::NEG_INFINITY; BINS];
-    let mut ys = [(f64::INFINITY, f64::NEG_INFINITY); BINS];
-    for p in pts {
-        let k = (((p.y - y0) / (y1 - y0) * BINS as f64) as usize).min(BINS - 1);
-        lo[k] = lo[k].min(p.x);
-        hi[k] = hi[k].max(p.x);
-        ys[k] = (ys[k].0.min(p.y), ys[k].1.max(p.y));
+    let gap = 1e-6 * (y1 - y0);
+    let mut station = vec![0usize; sorted.len()];
+    for k in 1..sorted.len() {
+        station[k] = station[k - 1] + usize::from(sorted[k].y - sorted[k - 1].y > gap);
     }
-    let bins: Vec<usize> = (0..BINS).filter(|&k| lo[k].is_finite()).collect();
-    let y_of = |k: usize| 0.5 * (ys[k].0 + ys[k].1);
-    let mut out: Vec<(f64, f64)> = bins.iter().map(|&k| (y_of(k), lo[k])).collect();
-    out.extend(bins.iter().rev().map(|&k| (y_of(k), hi[k])));
-    if let Some(&first) = out.first() {
-        out.push(first);
+    if station[sorted.len() - 1] + 1 > MAX_STATIONS {
+        for (k, p) in sorted.iter().enumerate() {
+            station[k] = (((p.y - y0) / (y1 - y0) * BINS as f64) as usize).min(BINS - 1);
+        }
     }
+    // (y sum, count, min x, max x) per station, in increasing y.
+    let mut acc: Vec<(f64, usize, f64, f64)> = Vec::new();
+    let mut index = std::collections::BTreeMap::new();
+    for (p, &k) in sorted.iter().zip(&station) {
+        let i = *index.entry(k).or_insert_with(|| {
+            acc.push((0.0, 0, f64::INFINITY, f64::NEG_INFINITY));
+            acc.len() - 1
+        });
+        let a = &mut acc[i];
+        *a = (a.0 + p.y, a.1 + 1, a.2.min(p.x), a.3.max(p.x));
+    }
+    let y_of = |a: &(f64, usize, f64, f64)| a.0 / a.1 as f64;
+    let mut out: Vec<(f64, f64)> = acc.iter().map(|a| (y_of(a), a.2)).collect();
+    out.extend(acc.iter().rev().map(|a| (y_of(a), a.3)));
+    out.push(out[0]);
     out
 }
 
@@ -610,28 +621,43 @@ mod tests {
 
     #[test]
     fn planform_outline_of_a_trapezoid_follows_its_edges() {
-        // Leading edge x = 0.5 y, trailing edge x = 2 + 0.2 y, y in [0, 3].
-        let mut pts = Vec::new();
-        for j in 0..=300 {
-            let y = 3.0 * j as f64 / 300.0;
-            for i in 0..=20 {
-                let t = i as f64 / 20.0;
-                let (le, te) = (0.5 * y, 2.0 + 0.2 * y);
-                pts.push(Point3::new(le + t * (te - le), y, 0.0));
+        // Leading edge x = 0.5 y, trailing edge x = 2 + 0.2 y, y in [0, 3]; sampled on 301
+        // spanwise stations whose y carries round-off (±1e-12, as a real surface gives).
+        let (le, te) = (|y: f64| 0.5 * y, |y: f64| 2.0 + 0.2 * y);
+        let trapezoid = |y_at: &dyn Fn(usize, usize) -> f64| {
+            let mut pts = Vec::new();
+            for j in 0..=300 {
+                for i in 0..=20 {
+                    let y = y_at(j, i);
+                    let t = i as f64 / 20.0;
+                    pts.push(Point3::new(le(y) + t * (te(y) - le(y)), y, 0.0));
+                }
             }
-        }
-        let out = planform_outline(&pts);
+            planform_outline(&pts)
+        };
+        let out = trapezoid(&|j, i| 0.01 * j as f64 + if i % 2 == 0 { 1e-12 } else { -1e-12 });
+        assert_eq!(out.len(), 2 * 301 + 1);
         assert_eq!(out.first(), out.last());
-        let n = (out.len() - 1) / 2;
+        for &(y, x) in &out[..301] {
+            assert!((x - le(y)).abs() < 1e-11, "LE at y={y}: {x}");
+        }
+        for &(y, x) in &out[301..602] {
+            assert!((x - te(y)).abs() < 1e-11, "TE at y={y}: {x}");
+        }
+        // Sections not at constant y (every point its own y): 60 equal bins instead, each
+        // edge within the bin's width times the edge's slope.
+        let out = trapezoid(&|j, i| (0.01 * j as f64 + 1e-4 * i as f64).min(3.0));
+        assert_eq!(out.len(), 2 * 60 + 1);
+        let n = 60;
         for &(y, x) in &out[..n] {
             assert!(
-                (x - 0.5 * y).abs() < 0.5 * 3.0 / 60.0 + 1e-12,
+                (x - le(y)).abs() < 0.5 * 3.0 / 60.0 + 1e-12,
                 "LE at y={y}: {x}"
             );
         }
         for &(y, x) in &out[n..2 * n] {
             assert!(
-                (x - 2.0 - 0.2 * y).abs() < 0.2 * 3.0 / 60.0 + 1e-12,
+                (x - te(y)).abs() < 0.2 * 3.0 / 60.0 + 1e-12,
                 "TE at y={y}: {x}"
             );
         }
