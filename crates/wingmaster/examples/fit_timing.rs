@@ -1,11 +1,11 @@
 //! CPU-time measurements of `wingmaster` (the machine is shared, so CPU time of this
 //! process, from `/proc/self/stat` on Linux, rather than wall time):
 //!
-//! * `timing fit FILE [N]`: N fits (default 100) of one airfoil file at 16 design variables;
-//! * `timing master [N]`: binding the wing master of `fixtures/geom/wing_body.ron` (121 × 11,
+//! * `fit_timing fit FILE [N]`: N fits (default 100) of one airfoil file at 16 design variables;
+//! * `fit_timing master [N]`: binding the wing master of `fixtures/geom/wing_body.ron` (121 × 11,
 //!   two key sections) 100 times, then N `generate` and N `jacobian` calls (default 1000).
 //!
-//! `cargo run --release -p wingmaster --example timing -- fit fixtures/airfoils/naca2412.dat`
+//! `cargo run --release -p wingmaster --example fit_timing -- fit fixtures/airfoils/naca2412.dat`
 
 use std::time::Instant;
 
@@ -32,7 +32,7 @@ fn main() {
     let t0 = Instant::now();
     match args.first().map(String::as_str) {
         Some("fit") => {
-            let path = args.get(1).expect("timing fit FILE [N]");
+            let path = args.get(1).expect("fit_timing fit FILE [N]");
             let n: usize = args.get(2).map_or(100, |s| s.parse().expect("N"));
             let f = std::fs::File::open(path).expect("open");
             let a = Airfoil::parse(std::io::BufReader::new(f), path).expect("parse");

@@ -3,7 +3,7 @@
 //! fuselage radius change of +5 %, and the evaluation at frozen parameters, each timed by the
 //! process's CPU time (user + system, from `/proc/self/stat`, Linux) and by the wall clock.
 //!
-//! `cargo run --profile bench -p surfgrid --example timing [-- H]` (H: far-field size,
+//! `cargo run --profile bench -p surfgrid --example grid_timing [-- H]` (H: far-field size,
 //! default 0.05; a line source of H/7.5 along the leading edge). Run with
 //! `RAYON_NUM_THREADS=1` for single-thread rates.
 
