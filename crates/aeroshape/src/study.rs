@@ -245,6 +245,8 @@ pub struct SetupReport {
     pub cells: usize,
     /// Wall nodes.
     pub wall_nodes: usize,
+    /// Seconds building the volume deformation set-up ([`deform::Deformer`]).
+    pub deform: f64,
 }
 
 /// The pipeline built once from a case; see the module doc.
@@ -258,6 +260,10 @@ pub struct Study {
     surface: SurfaceGrid,
     wall: Vec<bool>,
     fixed_nodes: Vec<u32>,
+    /// The volume deformation set-up (classification, ordering, baseline stiffness and
+    /// multigrid hierarchy), built once; prescribed nodes: the wall nodes in index order, then
+    /// `fixed_nodes`.
+    deformer: deform::Deformer<'static>,
     quality: Vec<f64>,
     setup: SetupReport,
 }
@@ -268,6 +274,34 @@ impl std::fmt::Debug for Study {
             .field("case", &self.case_path)
             .field("nodes", &self.grid.n_nodes())
             .finish_non_exhaustive()
+    }
+}
+
+/// The boundary conditions of the volume deformation: `slide` markers slide on their plane,
+/// `fixed` markers are held; prescribed displacements (here zero: only which nodes are
+/// prescribed matters to the set-up) on the wall nodes (index order), then on `fixed_nodes` (nodes of `fixed` markers are held even where they
+/// touch a sliding marker: a prescribed displacement takes precedence over sliding in
+/// `deform`).
+fn deform_bc(case: &Case, wall: &[bool], fixed_nodes: &[u32]) -> deform::BoundaryConditions {
+    let mut displacements: Vec<(u32, [f64; 3])> = wall
+        .iter()
+        .enumerate()
+        .filter(|(_, w)| **w)
+        .map(|(i, _)| (i as u32, [0.0; 3]))
+        .collect();
+    displacements.extend(fixed_nodes.iter().map(|&v| (v, [0.0; 3])));
+    deform::BoundaryConditions {
+        markers: case
+            .slide
+            .iter()
+            .map(|m| (m.clone(), deform::MarkerRole::SlidePlane))
+            .chain(
+                case.fixed
+                    .iter()
+                    .map(|m| (m.clone(), deform::MarkerRole::Fixed)),
+            )
+            .collect(),
+        displacements,
     }
 }
 
@@ -471,11 +505,23 @@ impl Study {
             .collect();
         fixed_nodes.sort_unstable();
         fixed_nodes.dedup();
+        let classify_seconds = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let deformer = deform::Deformer::new(
+            &grid,
+            &deform_bc(&case, &wall, &fixed_nodes),
+            &case.deform.options(),
+        )
+        .map_err(|e| StudyError::Setup {
+            path: grid_path.display().to_string(),
+            message: format!("volume deformation set-up: {e}"),
+        })?;
         let setup = SetupReport {
             read,
             param: t_param,
             model: t_model,
-            classify: t.elapsed().as_secs_f64(),
+            classify: classify_seconds,
+            deform: t.elapsed().as_secs_f64(),
             classify_max_distance: crep.max_distance,
             nodes: grid.n_nodes(),
             cells: grid.cells.len(),
@@ -491,6 +537,7 @@ impl Study {
             surface,
             wall,
             fixed_nodes,
+            deformer,
             quality,
             setup,
         })
@@ -629,39 +676,26 @@ impl Study {
         // 4. volume deformation
         progress("deform");
         let t = Instant::now();
+        // Prescribed values in the order of the set-up's boundary conditions (`deform_bc`):
+        // the wall nodes, then the nodes of `fixed` markers (held at zero).
         let mut displacements = Vec::new();
         let mut any = false;
         for (i, w) in self.wall.iter().enumerate() {
             if *w {
                 let d = surface.coords[i] - self.surface.coords[i];
                 any |= d.x != 0.0 || d.y != 0.0 || d.z != 0.0;
-                displacements.push((i as u32, [d.x, d.y, d.z]));
+                displacements.push([d.x, d.y, d.z]);
             }
         }
+        displacements.resize(displacements.len() + self.fixed_nodes.len(), [0.0; 3]);
         let mut grid = self.grid.clone();
         let deform_phase = if any {
-            // nodes of `fixed` markers are held even where they touch a sliding marker
-            // (a prescribed zero displacement takes precedence over sliding in `deform`)
-            for &v in &self.fixed_nodes {
-                displacements.push((v, [0.0; 3]));
-            }
-            let bc = deform::BoundaryConditions {
-                markers: self
-                    .case
-                    .slide
-                    .iter()
-                    .map(|m| (m.clone(), deform::MarkerRole::SlidePlane))
-                    .chain(
-                        self.case
-                            .fixed
-                            .iter()
-                            .map(|m| (m.clone(), deform::MarkerRole::Fixed)),
-                    )
-                    .collect(),
-                displacements,
-            };
-            let opts = self.case.deform.options();
-            let d = deform::deform(&self.grid, &bc, &opts).map_err(phase("deform"))?;
+            // The set-up is reused; no warm start from an earlier evaluation, so the answer
+            // does not depend on the call history (bit for bit the cold `deform::deform`).
+            let d = self
+                .deformer
+                .deform(&displacements, None)
+                .map_err(phase("deform"))?;
             grid.coords = d.coords;
             // wall nodes exactly at their new position on the geometry
             for (i, w) in self.wall.iter().enumerate() {

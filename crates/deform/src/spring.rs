@@ -609,6 +609,69 @@ enum Pre<'a> {
     None,
 }
 
+/// The spring matrix of Eq. 21 on a grid state and its preconditioner (with the stiffness
+/// factors that depend on the state), built once per state.
+struct Base {
+    /// The matrix (None when the multigrid hierarchy owns it).
+    a: Option<SymMatrix>,
+    pre: Pre<'static>,
+    vol_factor: Vec<f64>,
+    wall_len: f64,
+}
+
+impl Base {
+    /// Springs at `x`, assembly of A and its preconditioner.
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        mesh: &Mesh,
+        cls: &Classified,
+        sys: &System,
+        adj: &Adjacency,
+        x: &[[f64; 3]],
+        opts: &DeformOptions,
+        times: &mut PhaseTimes,
+    ) -> Result<Self> {
+        let t = Instant::now();
+        let moving: Vec<bool> = if opts.stiffness == Stiffness::WallDistance {
+            cls.roles
+                .iter()
+                .map(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let sp = springs(mesh, x, opts.stiffness, adj, &moving);
+        let a = assemble(sys, adj, &sp);
+        times.assemble += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let (a, pre) = match opts.solver {
+            SolverKind::PcgMultigrid => {
+                (None, Pre::Amg(Amg::new_owned(a, &AmgOptions::default())?))
+            }
+            SolverKind::PcgJacobi => {
+                let j = Jacobi::new(&a);
+                (Some(a), Pre::Jacobi(j))
+            }
+            SolverKind::PointIteration => (Some(a), Pre::None),
+        };
+        times.precond += t.elapsed().as_secs_f64();
+        Ok(Self {
+            a,
+            pre,
+            vol_factor: sp.vol_factor,
+            wall_len: sp.wall_len,
+        })
+    }
+
+    fn matrix(&self) -> &SymMatrix {
+        match (&self.a, &self.pre) {
+            (Some(a), _) => a,
+            (None, Pre::Amg(m)) => m.fine(),
+            (None, _) => unreachable!("the matrix is kept unless the hierarchy owns it"),
+        }
+    }
+}
+
 struct StepOut {
     iterations: usize,
     rot_iterations: usize,
@@ -653,6 +716,8 @@ fn step(
     times: &mut PhaseTimes,
     sup: Option<&Supports>,
     params: &mut [[f64; 2]],
+    base: Option<&Base>,
+    warm: Option<&[V3]>,
 ) -> Result<StepOut> {
     let x0 = &mesh.coords;
     let n = cur.len();
@@ -699,28 +764,25 @@ fn step(
         cur.copy_from_slice(&target);
         return Ok(out);
     }
-    let t = Instant::now();
-    let moving: Vec<bool> = if opts.stiffness == Stiffness::WallDistance {
-        cls.roles
-            .iter()
-            .map(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
-            .collect()
-    } else {
-        Vec::new()
+    let owned;
+    let base = match base {
+        Some(b) => b,
+        None => {
+            owned = Base::new(mesh, cls, sys, adj, cur, opts, times)?;
+            &owned
+        }
     };
-    let sp = springs(mesh, cur, opts.stiffness, adj, &moving);
-    let a = assemble(sys, adj, &sp);
-    times.assemble += t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let pre = match opts.solver {
-        SolverKind::PcgMultigrid => Pre::Amg(Amg::new(&a, &AmgOptions::default())?),
-        SolverKind::PcgJacobi => Pre::Jacobi(Jacobi::new(&a)),
-        SolverKind::PointIteration => Pre::None,
+    let sp = Springs {
+        x: cur,
+        kind: opts.stiffness,
+        vol_factor: base.vol_factor.clone(),
+        wall_len: base.wall_len,
     };
-    if let Pre::Amg(m) = &pre {
+    let a = base.matrix();
+    let pre = &base.pre;
+    if let Pre::Amg(m) = pre {
         out.amg = Some(m.info());
     }
-    times.precond += t.elapsed().as_secs_f64();
 
     // R: unit quaternions per node (vector part, scalar part); identity by default.
     let t = Instant::now();
@@ -770,8 +832,8 @@ fn step(
             let mut xv = vec![[0.0; 3]; nu];
             let mut xw = vec![[1.0, 0.0, 0.0]; nu];
             let none = Constraints::default();
-            let rv = solve_one(&a, &bv, &mut xv, &none, &pre, opts, 1.0);
-            let rw = solve_one(&a, &bw, &mut xw, &none, &pre, opts, 1.0);
+            let rv = solve_one(a, &bv, &mut xv, &none, pre, opts, 1.0);
+            let rw = solve_one(a, &bw, &mut xw, &none, pre, opts, 1.0);
             out.rot_iterations = rv.iterations + rw.iterations;
             for (k, &i) in sys.node_of.iter().enumerate() {
                 let (v, w) = (xv[k], xw[k][0]);
@@ -833,14 +895,17 @@ fn step(
 
     let t = Instant::now();
     let nu = sys.node_of.len();
-    let mut dx = vec![[0.0; 3]; nu];
+    let mut dx = match warm {
+        Some(w) => w.to_vec(),
+        None => vec![[0.0; 3]; nu],
+    };
     let sliding_on_supports = sup.is_some() && sys.sup_unk.iter().any(|&u| u != u32::MAX);
     let cons = if sliding_on_supports {
         constraints(cls, sys, sup, params)?
     } else {
         sys.cons.clone()
     };
-    let rep = solve_one(&a, &b, &mut dx, &cons, &pre, opts, max_disp);
+    let rep = solve_one(a, &b, &mut dx, &cons, pre, opts, max_disp);
     let check = |rep: &SolveReport, what: &str| {
         let ok = match opts.solver {
             SolverKind::PointIteration => rep.iterations < opts.max_iters,
@@ -915,7 +980,7 @@ fn step(
                 0.5
             };
             let mut delta = vec![[0.0; 3]; nu];
-            let rep = solve_tol(&a, &r, &mut delta, &cons, &pre, opts, max_disp, tol);
+            let rep = solve_tol(a, &r, &mut delta, &cons, pre, opts, max_disp, tol);
             check(&rep, "spring system (Eq. 21), sliding correction")?;
             out.iterations += rep.iterations;
             for (d, e) in dx.iter_mut().zip(&delta) {
@@ -1079,199 +1144,384 @@ fn deform_driver(
     opts: &DeformOptions,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Deformed> {
-    if !opts.renumber || mesh.n_nodes() < 2 {
-        return deform_inner(mesh, bc, sup, opts, progress);
-    }
-    // Validate in the user's numbering first, so that errors name the user's nodes.
-    classify(mesh, bc, opts.plane_rel_tol, sup)?;
-    let t = Instant::now();
-    let perm = spatial_order(&mesh.coords);
-    let mut m2 = mesh.clone();
-    m2.renumber_nodes(&perm).map_err(|e| Error::BadGraph {
-        reason: e.to_string(),
-    })?;
-    let bc2 = BoundaryConditions {
-        markers: bc.markers.clone(),
-        displacements: bc
-            .displacements
-            .iter()
-            .map(|&(v, d)| (perm[v as usize], d))
-            .collect(),
-    };
-    let sup2 = sup.map(|sp| Supports {
-        db: sp.db,
-        nodes: sp
-            .nodes
-            .iter()
-            .filter(|(v, _)| (*v as usize) < perm.len())
-            .map(|&(v, s)| (perm[v as usize], s))
-            .collect(),
-    });
-    let t_perm = t.elapsed().as_secs_f64();
-    let mut inv = vec![0u32; perm.len()];
-    for (old, &new) in perm.iter().enumerate() {
-        inv[new as usize] = old as u32;
-    }
-    let mut d = match deform_inner(&m2, &bc2, sup2.as_ref(), opts, progress) {
-        Ok(d) => d,
-        Err(Error::Support {
-            node: Some(v),
-            entity,
-            reason,
-        }) => {
-            return Err(Error::Support {
-                node: Some(inv[v as usize]),
-                entity,
-                reason,
-            });
-        }
-        Err(e) => return Err(e),
-    };
-    d.coords = perm.iter().map(|&p| d.coords[p as usize]).collect();
-    for (v, _) in d.supports.iter_mut() {
-        *v = inv[*v as usize];
-    }
-    d.supports.sort_by_key(|e| e.0);
-    d.report.seconds.setup += t_perm;
-    Ok(d)
+    let d = Deformer::build(mesh, bc, sup, opts, progress)?;
+    let values: Vec<[f64; 3]> = bc.displacements.iter().map(|e| e.1).collect();
+    let mut out = d.run(&values, None, progress)?;
+    let s = &mut out.report.seconds;
+    s.setup += d.setup.setup;
+    s.assemble += d.setup.assemble;
+    s.precond += d.setup.precond;
+    s.quality += d.setup.quality;
+    Ok(out)
 }
 
-fn deform_inner(
-    mesh: &Mesh,
-    bc: &BoundaryConditions,
-    sup: Option<&Supports>,
-    opts: &DeformOptions,
-    progress: &mut dyn FnMut(&str, usize, usize),
-) -> Result<Deformed> {
-    let mut times = PhaseTimes::default();
-    let t = Instant::now();
-    progress("setup", 0, 1);
-    let cls = classify(mesh, bc, opts.plane_rel_tol, sup)?;
-    let adj = Adjacency::build(mesh);
-    let sys = build_system(&cls, &adj, opts.renumber);
-    times.setup = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let q0 = cell_quality(mesh, &mesh.coords);
-    let before = QualitySummary::of(&q0);
-    times.quality += t.elapsed().as_secs_f64();
-    let mut attempts = Vec::new();
-    let mut notes = Vec::new();
-    let mut inc = 1usize;
-    loop {
-        attempts.push(inc);
-        let mut cur = mesh.coords.clone();
-        let mut params: Vec<[f64; 2]> = cls.supports.iter().map(|s| s.param).collect();
-        let mut slide_iterations = 0;
-        let mut slide_update = 0.0f64;
-        let mut iterations = 0;
-        let mut rot_iterations = 0;
-        let mut residual = 0.0f64;
-        let mut amg = None;
-        for m in 1..=inc {
-            progress("solve", m - 1, inc);
-            let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
-            let o = step(
-                mesh,
-                &cls,
-                bc,
-                &sys,
-                &adj,
-                &mut cur,
-                s,
-                opts,
-                &mut times,
-                sup,
-                &mut params,
-            )?;
-            slide_iterations += o.slide_iterations;
-            slide_update = slide_update.max(o.slide_update);
-            iterations += o.iterations;
-            rot_iterations += o.rot_iterations;
-            residual = residual.max(o.residual);
-            if o.amg.is_some() {
-                amg = o.amg;
-            }
-        }
-        progress("quality", inc, inc);
+/// A reusable deformation set-up: everything that depends only on the baseline grid and on
+/// the boundary-condition roles, built once by [`Deformer::new`] — node classification and
+/// sliding-plane fits, adjacency, the Morton renumbering and the reverse Cuthill–McKee order
+/// of the unknowns, the spring stiffnesses at the baseline geometry, the matrix A of Eq. 21
+/// and its preconditioner (multigrid hierarchy or Jacobi diagonal), the baseline quality.
+///
+/// [`Deformer::deform`] then takes new values for the prescribed displacements (same nodes,
+/// same order as the set-up's [`BoundaryConditions::displacements`]) and reuses all of it for
+/// the first increment, which starts from the baseline grid — so the matrix there is exactly
+/// the baseline one and the result is bit for bit that of the free [`deform`]. The rotation
+/// field R (Eqs. 25–26) only changes the right-hand side of Eq. 21, never A, so nothing is
+/// approximated. When the quality guard splits the motion into increments, the increments
+/// after the first start from a deformed state and assemble their own A and preconditioner.
+pub struct Deformer<'s> {
+    /// The grid in solver numbering (Morton-renumbered with `opts.renumber`).
+    mesh: Mesh,
+    /// Input node → solver node (None without renumbering).
+    perm: Option<Vec<u32>>,
+    /// Solver node → input node (empty without renumbering).
+    inv: Vec<u32>,
+    /// The boundary conditions in solver numbering.
+    bc: BoundaryConditions,
+    sup: Option<Supports<'s>>,
+    opts: DeformOptions,
+    cls: Classified,
+    adj: Adjacency,
+    sys: System,
+    before: QualitySummary,
+    /// A and its preconditioner at the baseline (None when there is no unknown).
+    base: Option<Base>,
+    setup: PhaseTimes,
+}
+
+impl Deformer<'static> {
+    /// Builds the set-up for `bc` on `mesh` (the displacement values of `bc` are not used;
+    /// only which nodes are prescribed).
+    pub fn new(mesh: &Mesh, bc: &BoundaryConditions, opts: &DeformOptions) -> Result<Self> {
+        Deformer::build(mesh, bc, None, opts, &mut |_, _, _| {})
+    }
+}
+
+impl<'s> Deformer<'s> {
+    /// [`Deformer::new`] with nodes sliding on geometry supports (as
+    /// [`deform_on_supports`]).
+    pub fn on_supports(
+        mesh: &Mesh,
+        bc: &BoundaryConditions,
+        supports: &Supports<'s>,
+        opts: &DeformOptions,
+    ) -> Result<Self> {
+        Deformer::build(mesh, bc, Some(supports), opts, &mut |_, _, _| {})
+    }
+
+    /// Seconds spent by the set-up (classification, ordering, assembly, preconditioner,
+    /// baseline quality).
+    pub fn setup_times(&self) -> PhaseTimes {
+        self.setup
+    }
+
+    /// Number of prescribed displacements [`Deformer::deform`] expects.
+    pub fn n_displacements(&self) -> usize {
+        self.bc.displacements.len()
+    }
+
+    fn build(
+        mesh: &Mesh,
+        bc: &BoundaryConditions,
+        sup: Option<&Supports<'s>>,
+        opts: &DeformOptions,
+        progress: &mut dyn FnMut(&str, usize, usize),
+    ) -> Result<Self> {
+        let mut times = PhaseTimes::default();
         let t = Instant::now();
-        let q1 = cell_quality(mesh, &cur);
-        let after = QualitySummary::of(&q1);
+        progress("setup", 0, 1);
+        let renumber = opts.renumber && mesh.n_nodes() >= 2;
+        let (m2, bc2, sup2, perm, inv) = if renumber {
+            // Validate in the user's numbering first, so that errors name the user's nodes.
+            classify(mesh, bc, opts.plane_rel_tol, sup)?;
+            let perm = spatial_order(&mesh.coords);
+            let mut m2 = mesh.clone();
+            m2.renumber_nodes(&perm).map_err(|e| Error::BadGraph {
+                reason: e.to_string(),
+            })?;
+            let bc2 = BoundaryConditions {
+                markers: bc.markers.clone(),
+                displacements: bc
+                    .displacements
+                    .iter()
+                    .map(|&(v, d)| (perm[v as usize], d))
+                    .collect(),
+            };
+            let sup2 = sup.map(|sp| Supports {
+                db: sp.db,
+                nodes: sp
+                    .nodes
+                    .iter()
+                    .filter(|(v, _)| (*v as usize) < perm.len())
+                    .map(|&(v, s)| (perm[v as usize], s))
+                    .collect(),
+            });
+            let mut inv = vec![0u32; perm.len()];
+            for (old, &new) in perm.iter().enumerate() {
+                inv[new as usize] = old as u32;
+            }
+            (m2, bc2, sup2, Some(perm), inv)
+        } else {
+            (mesh.clone(), bc.clone(), sup.cloned(), None, Vec::new())
+        };
+        let cls = classify(&m2, &bc2, opts.plane_rel_tol, sup2.as_ref())?;
+        let adj = Adjacency::build(&m2);
+        let sys = build_system(&cls, &adj, opts.renumber);
+        times.setup = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let q0 = cell_quality(&m2, &m2.coords);
+        let before = QualitySummary::of(&q0);
         times.quality += t.elapsed().as_secs_f64();
-        let low = after.min < opts.min_quality_ratio * before.min;
-        let bad = after.inverted > before.inverted || low;
-        if bad && inc < opts.max_increments {
-            notes.push(format!(
+        let base = if sys.node_of.is_empty() {
+            None
+        } else {
+            Some(Base::new(
+                &m2, &cls, &sys, &adj, &m2.coords, opts, &mut times,
+            )?)
+        };
+        Ok(Self {
+            mesh: m2,
+            perm,
+            inv,
+            bc: bc2,
+            sup: sup2,
+            opts: *opts,
+            cls,
+            adj,
+            sys,
+            before,
+            base,
+            setup: times,
+        })
+    }
+
+    /// Deforms the grid for the prescribed displacements `displacements` (one per entry of
+    /// the set-up's `bc.displacements`, same order), reusing the set-up. `warm_start`: the
+    /// coordinates of an earlier result (input numbering) as the initial guess of the Eq. 21
+    /// solve (single increment only); the answer then agrees with the cold one to the solver
+    /// tolerance, not bit for bit. Report times exclude the set-up ([`Deformer::setup_times`]).
+    pub fn deform(
+        &self,
+        displacements: &[[f64; 3]],
+        warm_start: Option<&[[f64; 3]]>,
+    ) -> Result<Deformed> {
+        self.run(displacements, warm_start, &mut |_, _, _| {})
+    }
+
+    /// [`Deformer::deform`] calling `progress(phase, done, total)` as it goes.
+    pub fn deform_with_progress(
+        &self,
+        displacements: &[[f64; 3]],
+        warm_start: Option<&[[f64; 3]]>,
+        progress: &mut dyn FnMut(&str, usize, usize),
+    ) -> Result<Deformed> {
+        self.run(displacements, warm_start, progress)
+    }
+
+    fn run(
+        &self,
+        displacements: &[[f64; 3]],
+        warm_start: Option<&[[f64; 3]]>,
+        progress: &mut dyn FnMut(&str, usize, usize),
+    ) -> Result<Deformed> {
+        if displacements.len() != self.bc.displacements.len() {
+            return Err(Error::BadMotion {
+                reason: format!(
+                    "{} displacements given; the deformation set-up has {} prescribed nodes",
+                    displacements.len(),
+                    self.bc.displacements.len()
+                ),
+            });
+        }
+        let mut bc = self.bc.clone();
+        for ((v, d), &new) in bc.displacements.iter_mut().zip(displacements) {
+            if !new.iter().all(|x| x.is_finite()) {
+                let v = self.perm.as_ref().map_or(*v, |_| self.inv[*v as usize]);
+                return Err(Error::BadMotion {
+                    reason: format!("node {v}: displacement {new:?} is not finite"),
+                });
+            }
+            *d = new;
+        }
+        let warm: Option<Vec<V3>> = match warm_start {
+            None => None,
+            Some(w) if w.len() != self.mesh.n_nodes() => {
+                return Err(Error::BadMotion {
+                    reason: format!(
+                        "warm start has {} nodes; the grid has {}",
+                        w.len(),
+                        self.mesh.n_nodes()
+                    ),
+                });
+            }
+            Some(w) => Some(
+                self.sys
+                    .node_of
+                    .iter()
+                    .map(|&i| {
+                        let u = self.perm.as_ref().map_or(i, |_| self.inv[i as usize]);
+                        let (p, q) = (w[u as usize], self.mesh.coords[i as usize]);
+                        [p[0] - q[0], p[1] - q[1], p[2] - q[2]]
+                    })
+                    .collect(),
+            ),
+        };
+        let mut d = match self.run_inner(&bc, warm.as_deref(), progress) {
+            Ok(d) => d,
+            Err(Error::Support {
+                node: Some(v),
+                entity,
+                reason,
+            }) if self.perm.is_some() => {
+                return Err(Error::Support {
+                    node: Some(self.inv[v as usize]),
+                    entity,
+                    reason,
+                });
+            }
+            Err(e) => return Err(e),
+        };
+        if let Some(perm) = &self.perm {
+            d.coords = perm.iter().map(|&p| d.coords[p as usize]).collect();
+            for (v, _) in d.supports.iter_mut() {
+                *v = self.inv[*v as usize];
+            }
+            d.supports.sort_by_key(|e| e.0);
+        }
+        Ok(d)
+    }
+
+    fn run_inner(
+        &self,
+        bc: &BoundaryConditions,
+        warm: Option<&[V3]>,
+        progress: &mut dyn FnMut(&str, usize, usize),
+    ) -> Result<Deformed> {
+        let (mesh, cls, sys, adj, opts) = (&self.mesh, &self.cls, &self.sys, &self.adj, &self.opts);
+        let sup = self.sup.as_ref();
+        let before = self.before;
+        let mut times = PhaseTimes::default();
+        let mut attempts = Vec::new();
+        let mut notes = Vec::new();
+        let mut inc = 1usize;
+        loop {
+            attempts.push(inc);
+            let mut cur = mesh.coords.clone();
+            let mut params: Vec<[f64; 2]> = cls.supports.iter().map(|s| s.param).collect();
+            let mut slide_iterations = 0;
+            let mut slide_update = 0.0f64;
+            let mut iterations = 0;
+            let mut rot_iterations = 0;
+            let mut residual = 0.0f64;
+            let mut amg = None;
+            for m in 1..=inc {
+                progress("solve", m - 1, inc);
+                let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
+                let o = step(
+                    mesh,
+                    cls,
+                    bc,
+                    sys,
+                    adj,
+                    &mut cur,
+                    s,
+                    opts,
+                    &mut times,
+                    sup,
+                    &mut params,
+                    // The first increment starts from the baseline: its A is the set-up's.
+                    if m == 1 { self.base.as_ref() } else { None },
+                    if inc == 1 { warm } else { None },
+                )?;
+                slide_iterations += o.slide_iterations;
+                slide_update = slide_update.max(o.slide_update);
+                iterations += o.iterations;
+                rot_iterations += o.rot_iterations;
+                residual = residual.max(o.residual);
+                if o.amg.is_some() {
+                    amg = o.amg;
+                }
+            }
+            progress("quality", inc, inc);
+            let t = Instant::now();
+            let q1 = cell_quality(mesh, &cur);
+            let after = QualitySummary::of(&q1);
+            times.quality += t.elapsed().as_secs_f64();
+            let low = after.min < opts.min_quality_ratio * before.min;
+            let bad = after.inverted > before.inverted || low;
+            if bad && inc < opts.max_increments {
+                notes.push(format!(
                 "{inc} increment(s): {} inverted cells, min quality {:.4} (initial {:.4}); retrying with {}",
                 after.inverted,
                 after.min,
                 before.min,
                 inc * 2
             ));
-            inc *= 2;
-            continue;
-        }
-        if after.inverted > before.inverted {
-            let worst = worst_cells(&q1, 5);
-            if !opts.allow_inverted {
-                return Err(Error::Inverted {
-                    count: after.inverted,
-                    increments: inc,
-                    worst,
-                });
+                inc *= 2;
+                continue;
             }
-            notes.push(format!(
-                "{} inverted cells kept (allowed); worst: {worst}",
-                after.inverted
-            ));
-        } else if low {
-            notes.push(format!(
-                "minimum quality {:.4} is below {} × initial {:.4} after {inc} increments",
-                after.min, opts.min_quality_ratio, before.min
-            ));
+            if after.inverted > before.inverted {
+                let worst = worst_cells(&q1, 5);
+                if !opts.allow_inverted {
+                    return Err(Error::Inverted {
+                        count: after.inverted,
+                        increments: inc,
+                        worst,
+                    });
+                }
+                notes.push(format!(
+                    "{} inverted cells kept (allowed); worst: {worst}",
+                    after.inverted
+                ));
+            } else if low {
+                notes.push(format!(
+                    "minimum quality {:.4} is below {} × initial {:.4} after {inc} increments",
+                    after.min, opts.min_quality_ratio, before.min
+                ));
+            }
+            let nmov = cls
+                .roles
+                .iter()
+                .filter(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
+                .count();
+            let report = DeformReport {
+                nodes: mesh.n_nodes(),
+                cells: mesh.cells.len(),
+                unknowns: sys.node_of.len(),
+                sliding: sys.cons.items.len(),
+                sliding_on_supports: cls.supports.len(),
+                slide_iterations,
+                slide_update,
+                moving: nmov,
+                planes: cls.planes.clone(),
+                increments: inc,
+                attempts,
+                iterations,
+                rotation_iterations: rot_iterations,
+                residual,
+                solver: opts.solver,
+                multigrid: amg,
+                quality_before: before,
+                quality_after: after,
+                seconds: times,
+                notes,
+            };
+            let supports = cls
+                .supports
+                .iter()
+                .zip(&params)
+                .map(|(sn, p)| {
+                    let s = match sn.kind {
+                        SupKind::Curve(curve) => Support::Curve { curve, t: p[0] },
+                        SupKind::Surface(surface) => Support::Surface { surface, uv: *p },
+                    };
+                    (sn.node, s)
+                })
+                .collect();
+            return Ok(Deformed {
+                coords: cur,
+                supports,
+                report,
+            });
         }
-        let nmov = cls
-            .roles
-            .iter()
-            .filter(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
-            .count();
-        let report = DeformReport {
-            nodes: mesh.n_nodes(),
-            cells: mesh.cells.len(),
-            unknowns: sys.node_of.len(),
-            sliding: sys.cons.items.len(),
-            sliding_on_supports: cls.supports.len(),
-            slide_iterations,
-            slide_update,
-            moving: nmov,
-            planes: cls.planes.clone(),
-            increments: inc,
-            attempts,
-            iterations,
-            rotation_iterations: rot_iterations,
-            residual,
-            solver: opts.solver,
-            multigrid: amg,
-            quality_before: before,
-            quality_after: after,
-            seconds: times,
-            notes,
-        };
-        let supports = cls
-            .supports
-            .iter()
-            .zip(&params)
-            .map(|(sn, p)| {
-                let s = match sn.kind {
-                    SupKind::Curve(curve) => Support::Curve { curve, t: p[0] },
-                    SupKind::Surface(surface) => Support::Surface { surface, uv: *p },
-                };
-                (sn.node, s)
-            })
-            .collect();
-        return Ok(Deformed {
-            coords: cur,
-            supports,
-            report,
-        });
     }
 }

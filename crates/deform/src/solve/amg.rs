@@ -57,9 +57,10 @@ struct Level {
     wdiag: Vec<f64>,
 }
 
-/// A smoothed-aggregation multigrid hierarchy over a borrowed fine matrix.
+/// A smoothed-aggregation multigrid hierarchy over a borrowed ([`Amg::new`]) or owned
+/// ([`Amg::new_owned`], kept for reuse across solves) fine matrix.
 pub struct Amg<'a> {
-    fine: &'a SymMatrix,
+    fine: std::borrow::Cow<'a, SymMatrix>,
     levels: Vec<Level>,
     /// Coarse matrices A_1 … A_L (A_0 is `fine`).
     coarse: Vec<SymMatrix>,
@@ -88,6 +89,22 @@ pub struct AmgInfo {
 impl<'a> Amg<'a> {
     /// Builds the hierarchy for `a` (symmetric positive definite, positive diagonal).
     pub fn new(a: &'a SymMatrix, opts: &AmgOptions) -> Result<Self> {
+        Self::build(std::borrow::Cow::Borrowed(a), opts)
+    }
+
+    /// [`Amg::new`] taking the fine matrix by value (the hierarchy can then be stored and
+    /// reused, e.g. by [`crate::Deformer`]).
+    pub fn new_owned(a: SymMatrix, opts: &AmgOptions) -> Result<Amg<'static>> {
+        Amg::build(std::borrow::Cow::Owned(a), opts)
+    }
+
+    /// The fine matrix A_0.
+    pub fn fine(&self) -> &SymMatrix {
+        &self.fine
+    }
+
+    fn build(fine: std::borrow::Cow<'a, SymMatrix>, opts: &AmgOptions) -> Result<Self> {
+        let a: &SymMatrix = &fine;
         let mut levels = Vec::new();
         let mut coarse: Vec<SymMatrix> = Vec::new();
         loop {
@@ -145,7 +162,7 @@ impl<'a> Amg<'a> {
             r: Vec::new(),
         });
         Ok(Self {
-            fine: a,
+            fine,
             levels,
             coarse,
             chol,
@@ -172,7 +189,7 @@ impl<'a> Amg<'a> {
 
     fn matrix(&self, l: usize) -> &SymMatrix {
         if l == 0 {
-            self.fine
+            &self.fine
         } else {
             &self.coarse[l - 1]
         }

@@ -3,4 +3,5 @@
 mod cases;
 mod identities;
 mod props;
+mod reuse;
 mod supports;

@@ -1,0 +1,147 @@
+//! [`deform::Deformer`]: the reusable set-up gives the cold free function's answer, for any
+//! sequence of calls and any thread count; a warm start agrees to the solver tolerance.
+
+use deform::{
+    BoundaryConditions, DeformOptions, Deformer, MarkerRole, SolverKind, Stiffness, deform,
+};
+use mesh::Mesh;
+
+fn grid() -> Mesh {
+    deform::generate::box_with_block([9, 6, 8], [0.0; 3], [2.0, 1.2, 1.6], [3, 0, 3], [6, 3, 5])
+}
+
+/// Wing nodes bent by `amp` × a smooth field (twist about y and heave), `y_m` sliding,
+/// the other box faces fixed.
+fn bc(m: &Mesh, amp: f64) -> BoundaryConditions {
+    let mut nodes: Vec<u32> = m
+        .marker("wing")
+        .unwrap()
+        .elements
+        .node_set()
+        .into_iter()
+        .collect();
+    nodes.sort_unstable();
+    BoundaryConditions {
+        markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
+        displacements: nodes
+            .iter()
+            .map(|&v| {
+                let p = m.coords[v as usize];
+                let s = p[1] / 1.2;
+                (
+                    v,
+                    [
+                        amp * 0.05 * s * (p[2] - 0.8),
+                        amp * 0.02 * s,
+                        amp * (0.06 * s * s - 0.05 * s * (p[0] - 1.0)),
+                    ],
+                )
+            })
+            .collect(),
+    }
+}
+
+fn values(bc: &BoundaryConditions) -> Vec<[f64; 3]> {
+    bc.displacements.iter().map(|e| e.1).collect()
+}
+
+#[test]
+fn deformer_reuse_equals_cold_free_function_bit_for_bit() {
+    let m = grid();
+    for (solver, stiffness) in [
+        (SolverKind::PcgMultigrid, Stiffness::InverseLength),
+        (SolverKind::PcgJacobi, Stiffness::WallDistance),
+        (SolverKind::PcgMultigrid, Stiffness::Volume),
+    ] {
+        let opts = DeformOptions {
+            solver,
+            stiffness,
+            ..Default::default()
+        };
+        let d = Deformer::new(&m, &bc(&m, 0.0), &opts).unwrap();
+        // Any call history: each answer is the cold one, bit for bit.
+        for amp in [1.0, 0.0, -0.7, 1.0] {
+            let b = bc(&m, amp);
+            let cold = deform(&m, &b, &opts).unwrap();
+            let warm = d.deform(&values(&b), None).unwrap();
+            assert_eq!(
+                warm.coords, cold.coords,
+                "{solver:?} {stiffness:?} amp {amp}"
+            );
+            assert_eq!(warm.report.iterations, cold.report.iterations);
+            if amp == 0.0 {
+                assert_eq!(warm.coords, m.coords, "zero displacement is the baseline");
+            } else {
+                assert_ne!(warm.coords, m.coords);
+                assert!(cold.report.iterations > 0);
+            }
+        }
+    }
+}
+
+#[test]
+fn deformer_warm_start_agrees_to_tolerance_and_saves_iterations() {
+    let m = grid();
+    let opts = DeformOptions::default();
+    let d = Deformer::new(&m, &bc(&m, 0.0), &opts).unwrap();
+    let first = d.deform(&values(&bc(&m, 1.0)), None).unwrap();
+    let b2 = bc(&m, 1.05);
+    let cold = deform(&m, &b2, &opts).unwrap();
+    let warm = d.deform(&values(&b2), Some(&first.coords)).unwrap();
+    let dmax = b2
+        .displacements
+        .iter()
+        .map(|e| e.1.iter().map(|c| c * c).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    let err = warm
+        .coords
+        .iter()
+        .zip(&cold.coords)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    assert!(
+        err <= 1e-6 * dmax,
+        "warm vs cold: {err:.3e} (max displacement {dmax:.3e})"
+    );
+    assert!(
+        warm.report.iterations < cold.report.iterations,
+        "warm {} vs cold {} iterations",
+        warm.report.iterations,
+        cold.report.iterations
+    );
+}
+
+#[test]
+fn deformer_independent_of_thread_count() {
+    let m = grid();
+    let b = bc(&m, 1.0);
+    let run = |t: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .unwrap()
+            .install(|| {
+                let d = Deformer::new(&m, &b, &DeformOptions::default()).unwrap();
+                d.deform(&values(&b), None).unwrap().coords
+            })
+    };
+    assert_eq!(run(1), run(3));
+}
+
+#[test]
+fn deformer_refuses_wrong_input() {
+    let m = grid();
+    let b = bc(&m, 1.0);
+    let d = Deformer::new(&m, &b, &DeformOptions::default()).unwrap();
+    let e = d.deform(&values(&b)[1..], None).unwrap_err().to_string();
+    assert!(e.contains("prescribed nodes"), "{e}");
+    let mut v = values(&b);
+    v[3][1] = f64::NAN;
+    let e = d.deform(&v, None).unwrap_err().to_string();
+    assert!(e.contains("not finite"), "{e}");
+    let e = d
+        .deform(&values(&b), Some(&m.coords[1..]))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("warm start"), "{e}");
+}
