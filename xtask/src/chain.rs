@@ -118,7 +118,7 @@ pub fn print_summary(r: &Value, out: &Path) {
         e["quality_after"]["inverted"]
     );
     println!(
-        "  wall nodes on their supports within {:.2e} (relative)",
+        "  wall nodes vs their support evaluated at their parameters (after deform): max {:.2e} (relative)",
         f(e, &["wall_support_rel"])
     );
     println!("  outputs in {}:", out.display());
