@@ -11,41 +11,18 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use criterion::{Criterion, Throughput};
-use deform::generate::box_with_block;
 use deform::solve::vecops::V3;
 use deform::solve::{Amg, AmgOptions, Constraints, Jacobi, SolveOptions, SymMatrix, pcg};
-use deform::{BoundaryConditions, DeformOptions, MarkerRole, RigidMotion, SolverKind, deform};
+use deform::{BoundaryConditions, DeformOptions, MarkerRole, SolverKind, deform};
 use mesh::Mesh;
 use rayon::prelude::*;
 
-/// The wing-like case: box [0,4]×[0,2]×[0,4], block (the "wing") x ∈ [1.5, 2.5],
-/// y ∈ [0, 1], z ≈ [1.88, 2.12] touching the symmetry plane y = 0.
+/// The wing-like case ([`deform::generate::wing_in_box`], pitched 5°).
 fn case(n: usize) -> (Mesh, BoundaryConditions) {
-    let ny = n / 2;
-    // n = 46, 84, 126 give ~53k, ~310k, ~1.03M nodes.
-    let b0 = [(0.375 * n as f64) as usize, 0, (0.47 * n as f64) as usize];
-    let b1 = [
-        (0.625 * n as f64) as usize,
-        ny / 2,
-        ((0.53 * n as f64) as usize).max(b0[2] + 1),
-    ];
-    let m = box_with_block([n, ny, n], [0.0; 3], [4.0, 2.0, 4.0], b0, b1);
-    let bc = BoundaryConditions {
-        markers: vec![
-            (
-                "wing".into(),
-                MarkerRole::Rigid(RigidMotion {
-                    angle_deg: -5.0,
-                    axis_point: [1.75, 0.0, 2.0],
-                    axis_dir: [0.0, 1.0, 0.0],
-                    translation: [0.0; 3],
-                }),
-            ),
-            ("y_m".into(), MarkerRole::SlidePlane),
-        ],
-        displacements: vec![],
-    };
-    (m, bc)
+    (
+        deform::generate::wing_in_box(n),
+        deform::generate::wing_pitch_conditions(),
+    )
 }
 
 /// CPU seconds (user + system, all threads) of this process so far, from /proc/self/stat

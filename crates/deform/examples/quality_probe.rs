@@ -3,35 +3,13 @@
 //! volume, wall), `ROT` (0/1), `RATIO` (guard's min_quality_ratio, to force increments).
 //! `WRITE_SU2=path` writes the case's grid as SU2 instead.
 
-use deform::generate::box_with_block;
-use deform::{BoundaryConditions, DeformOptions, MarkerRole, RigidMotion, Stiffness, deform};
+use deform::{DeformOptions, Stiffness, deform};
 
 fn main() {
     let env = |k: &str, d: &str| std::env::var(k).unwrap_or_else(|_| d.into());
     let n: usize = env("N", "30").parse().unwrap();
-    let ny = n / 2;
-    let b0 = [(0.375 * n as f64) as usize, 0, (0.47 * n as f64) as usize];
-    let b1 = [
-        (0.625 * n as f64) as usize,
-        ny / 2,
-        ((0.53 * n as f64) as usize).max(b0[2] + 1),
-    ];
-    let m = box_with_block([n, ny, n], [0.0; 3], [4.0, 2.0, 4.0], b0, b1);
-    let bc = BoundaryConditions {
-        markers: vec![
-            (
-                "wing".into(),
-                MarkerRole::Rigid(RigidMotion {
-                    angle_deg: -5.0,
-                    axis_point: [1.75, 0.0, 2.0],
-                    axis_dir: [0.0, 1.0, 0.0],
-                    translation: [0.0; 3],
-                }),
-            ),
-            ("y_m".into(), MarkerRole::SlidePlane),
-        ],
-        displacements: vec![],
-    };
+    let m = deform::generate::wing_in_box(n);
+    let bc = deform::generate::wing_pitch_conditions();
     if let Ok(path) = std::env::var("WRITE_SU2") {
         // Write the case's grid (for end-to-end runs of `aeroshape deform`) and stop.
         let mut f = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());

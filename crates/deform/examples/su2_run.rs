@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use deform::{BoundaryConditions, DeformOptions, MarkerRole, RigidMotion, Stiffness, deform};
+use deform::{DeformOptions, Stiffness, deform};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -14,21 +14,7 @@ fn main() {
     let t = Instant::now();
     let m = mesh::io::read_path(input.as_ref()).unwrap();
     let read = t.elapsed().as_secs_f64();
-    let bc = BoundaryConditions {
-        markers: vec![
-            (
-                "wing".into(),
-                MarkerRole::Rigid(RigidMotion {
-                    angle_deg: -5.0,
-                    axis_point: [1.75, 0.0, 2.0],
-                    axis_dir: [0.0, 1.0, 0.0],
-                    translation: [0.0; 3],
-                }),
-            ),
-            ("y_m".into(), MarkerRole::SlidePlane),
-        ],
-        displacements: vec![],
-    };
+    let bc = deform::generate::wing_pitch_conditions();
     let stiffness = match std::env::var("STIFF").as_deref() {
         Ok("l2") => Stiffness::InverseLengthSquared,
         _ => Stiffness::WallDistance,

@@ -6,6 +6,8 @@ use std::collections::HashMap;
 
 use mesh::{ElementKind, Elements, Marker, Mesh};
 
+use crate::{BoundaryConditions, MarkerRole, RigidMotion};
+
 /// A box of `n[0] × n[1] × n[2]` cubes over `[lo, hi]`, each split into six tetrahedra, with
 /// the cubes of index range `[b0, b1)` (per axis) removed. Markers: `x_m x_p y_m y_p z_m z_p`
 /// (the box faces, without the parts covered by the block) and `wing` (the block's faces
@@ -146,5 +148,41 @@ pub fn grade_towards(mesh: &mut Mesh, lo: [f64; 3], hi: [f64; 3], ratio: f64) {
             let t = (target - g[i - 1]) / (g[i] - g[i - 1]);
             p[k] = xs[i - 1] + t * (xs[i] - xs[i - 1]);
         }
+    }
+}
+
+/// The benchmark case of the deformation issue: the box [0,4]×[0,2]×[0,4] of `n × n/2 × n`
+/// cubes with the block x ∈ [1.5, 2.5], y ∈ [0, 1], z ≈ [1.88, 2.12] removed (the "wing",
+/// touching the symmetry plane y = 0). n = 30, 46, 84, 126 give ~15k, ~53k, ~310k, ~1.03M
+/// nodes. Boundary conditions: [`wing_pitch_conditions`].
+pub fn wing_in_box(n: usize) -> Mesh {
+    let ny = n / 2;
+    let b0 = [(0.375 * n as f64) as usize, 0, (0.47 * n as f64) as usize];
+    let b1 = [
+        (0.625 * n as f64) as usize,
+        ny / 2,
+        ((0.53 * n as f64) as usize).max(b0[2] + 1),
+    ];
+    box_with_block([n, ny, n], [0.0; 3], [4.0, 2.0, 4.0], b0, b1)
+}
+
+/// The benchmark motion on [`wing_in_box`]: the `wing` marker pitched 5° nose up about the
+/// spanwise axis through (1.75, 0, 2), the symmetry plane `y_m` sliding, every other
+/// marker fixed.
+pub fn wing_pitch_conditions() -> BoundaryConditions {
+    BoundaryConditions {
+        markers: vec![
+            (
+                "wing".into(),
+                MarkerRole::Rigid(RigidMotion {
+                    angle_deg: -5.0,
+                    axis_point: [1.75, 0.0, 2.0],
+                    axis_dir: [0.0, 1.0, 0.0],
+                    translation: [0.0; 3],
+                }),
+            ),
+            ("y_m".into(), MarkerRole::SlidePlane),
+        ],
+        displacements: vec![],
     }
 }

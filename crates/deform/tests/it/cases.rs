@@ -174,29 +174,8 @@ fn adaptation_matrices_keep_near_wall_cells_rigid() {
 #[test]
 fn wall_distance_stiffness_keeps_quality_on_the_benchmark_case() {
     let n = 30;
-    let ny = n / 2;
-    let b0 = [(0.375 * n as f64) as usize, 0, (0.47 * n as f64) as usize];
-    let b1 = [
-        (0.625 * n as f64) as usize,
-        ny / 2,
-        (0.53 * n as f64) as usize,
-    ];
-    let m = deform::generate::box_with_block([n, ny, n], [0.0; 3], [4.0, 2.0, 4.0], b0, b1);
-    let bc = BoundaryConditions {
-        markers: vec![
-            (
-                "wing".into(),
-                MarkerRole::Rigid(RigidMotion {
-                    angle_deg: -5.0,
-                    axis_point: [1.75, 0.0, 2.0],
-                    axis_dir: [0.0, 1.0, 0.0],
-                    translation: [0.0; 3],
-                }),
-            ),
-            ("y_m".into(), MarkerRole::SlidePlane),
-        ],
-        displacements: vec![],
-    };
+    let m = deform::generate::wing_in_box(n);
+    let bc = deform::generate::wing_pitch_conditions();
     let ratio = |stiffness| {
         let d = deform(
             &m,
