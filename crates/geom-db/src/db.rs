@@ -742,6 +742,35 @@ impl GeomDb {
         &self.control_nodes
     }
 
+    /// The control node positions with every node of support surface `s` replaced by
+    /// `f(node)`, each shared node once (e.g. a fuselage radius change); the other nodes
+    /// unchanged. Feed the result to [`with_control_points`](Self::with_control_points) or
+    /// a model update.
+    ///
+    /// ```
+    /// # let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/geom/sphere.ron")).unwrap();
+    /// # let db = geom_db::GeomDb::from_ron_str(&text, "sphere.ron").unwrap();
+    /// let pts = db.control_points_with_surface_moved(geom_db::SurfaceId(0), |p| p * 2.0);
+    /// assert_eq!(pts.len(), db.control_points().len());
+    /// ```
+    pub fn control_points_with_surface_moved(
+        &self,
+        s: SurfaceId,
+        f: impl Fn(&Point3) -> Point3,
+    ) -> Vec<Point3> {
+        let mut pts = self.control_nodes.clone();
+        let mut done = vec![false; pts.len()];
+        for ids in &self.surface(s).control.nodes {
+            for id in ids {
+                if !done[id.index()] {
+                    pts[id.index()] = f(&pts[id.index()]);
+                    done[id.index()] = true;
+                }
+            }
+        }
+        pts
+    }
+
     /// Moves the control nodes to `pts` and re-solves the coefficients A of every arc and
     /// patch that has control nodes (A = V⁻¹R, Eq. 4; A = V_u⁻¹ R V_v⁻ᵀ, Eq. 9).
     ///

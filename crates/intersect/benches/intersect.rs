@@ -74,13 +74,9 @@ fn update(c: &mut Criterion) {
         .iter()
         .position(|s| s.name == "fuselage")
         .unwrap();
-    let mut nodes = db.control_points().to_vec();
-    for ids in &db.surfaces[fus].control.nodes {
-        for id in ids {
-            let p = db.control_points()[id.index()];
-            nodes[id.index()] = Point3::new(p.x, p.y * 1.05, p.z * 1.05);
-        }
-    }
+    let nodes = db.control_points_with_surface_moved(geom_db::SurfaceId::from_index(fus), |p| {
+        Point3::new(p.x, p.y * 1.05, p.z * 1.05)
+    });
     let mut g = c.benchmark_group("model_update");
     g.sample_size(10);
     g.bench_function("baseline_seeding", |b| {

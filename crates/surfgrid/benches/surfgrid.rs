@@ -105,17 +105,9 @@ fn bench(c: &mut Criterion) {
         .iter()
         .position(|s| s.name == "fuselage")
         .unwrap();
-    let mut pts = db.control_points().to_vec();
-    let mut done = vec![false; pts.len()];
-    for ids in &db.surfaces[fus].control.nodes {
-        for id in ids {
-            if !done[id.index()] {
-                let p = pts[id.index()];
-                pts[id.index()] = Point3::new(p.x, p.y * 1.05, p.z * 1.05);
-                done[id.index()] = true;
-            }
-        }
-    }
+    let pts = db.control_points_with_surface_moved(geom_db::SurfaceId::from_index(fus), |p| {
+        Point3::new(p.x, p.y * 1.05, p.z * 1.05)
+    });
     let (new, _) =
         intersect::update::update_model(&db, &pts, &intersect::update::UpdateOptions::default())
             .unwrap();

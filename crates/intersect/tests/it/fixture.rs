@@ -15,18 +15,9 @@ fn surface_id(db: &GeomDb, name: &str) -> usize {
     db.surfaces.iter().position(|s| s.name == name).unwrap()
 }
 
+/// Control nodes of support surface `s` moved by `f`.
 fn move_surface_nodes(db: &GeomDb, s: usize, f: impl Fn(&Point3) -> Point3) -> Vec<Point3> {
-    let mut pts = db.control_points().to_vec();
-    let mut done = vec![false; pts.len()];
-    for ids in &db.surfaces[s].control.nodes {
-        for id in ids {
-            if !done[id.index()] {
-                pts[id.index()] = f(&pts[id.index()]);
-                done[id.index()] = true;
-            }
-        }
-    }
-    pts
+    db.control_points_with_surface_moved(geom_db::SurfaceId::from_index(s), f)
 }
 
 /// The fixture's own junction against its surfaces at 200 samples per arc.

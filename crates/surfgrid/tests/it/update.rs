@@ -9,18 +9,9 @@ use surfgrid::{GenerateOptions, SizeField, UpdateOptions, generate, update};
 
 use crate::common::{check_grid, fixture, wing_body_field};
 
+/// Control nodes of support surface `s` moved by `f`.
 fn move_surface_nodes(db: &GeomDb, s: usize, f: impl Fn(&Point3) -> Point3) -> Vec<Point3> {
-    let mut pts = db.control_points().to_vec();
-    let mut done = vec![false; pts.len()];
-    for ids in &db.surfaces[s].control.nodes {
-        for id in ids {
-            if !done[id.index()] {
-                pts[id.index()] = f(&pts[id.index()]);
-                done[id.index()] = true;
-            }
-        }
-    }
-    pts
+    db.control_points_with_surface_moved(geom_db::SurfaceId::from_index(s), f)
 }
 
 #[test]
