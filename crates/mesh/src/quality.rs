@@ -242,15 +242,26 @@ pub fn summary(q: &[f64]) -> Summary {
     }
     let mean = v.iter().sum::<f64>() / measured as f64;
     let n_nonpositive = v.iter().filter(|&&x| x <= 0.0).count();
-    v.sort_unstable_by(f64::total_cmp);
+    let min = v
+        .iter()
+        .copied()
+        .min_by(f64::total_cmp)
+        .expect("measured > 0");
+    let max = v
+        .iter()
+        .copied()
+        .max_by(f64::total_cmp)
+        .expect("measured > 0");
+    // The value of rank ⌈n/100⌉ in increasing order (a selection, not a sort).
     let rank = ((0.01 * measured as f64).ceil() as usize).max(1) - 1;
+    let (_, p1, _) = v.select_nth_unstable_by(rank, f64::total_cmp);
     Summary {
         count: q.len(),
         measured,
-        min: v[0],
+        min,
         mean,
-        p1: v[rank],
-        max: v[measured - 1],
+        p1: *p1,
+        max,
         n_nonpositive,
     }
 }
