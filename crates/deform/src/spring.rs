@@ -10,12 +10,15 @@
 //! for planes.
 //!
 //! R (Eqs. 25–26): per moving skin element (see [`crate::rotation`]), averaged to skin nodes
-//! as unit quaternions (area-weighted sum, normalised), propagated by Eq. 26 solved for the
-//! four quaternion components with the skin values and R = I on fixed nodes held, starting from
-//! R = I; each node's result is normalised (the projection of the average to the nearest
-//! rotation), and R_ij is the normalised sum of the two end nodes' quaternions — the geodesic
-//! midpoint of R_i and R_j, a proper rotation, at the cost of a few flops per edge instead of
-//! an SVD per edge.
+//! as unit quaternions (area-weighted sum, normalised, scalar part w ≥ 0), propagated by
+//! Eq. 26 solved for the quaternions' vector part u (one three-component solve) with the skin
+//! values and R = I (u = 0) on fixed nodes held, starting from R = I; each node's rotation is
+//! the unit quaternion with that vector part, w = √(1 − |u|²) (|u| ≤ 1 by the discrete maximum
+//! principle, A being an M-matrix; clamped against round-off). This replaces a second solve for
+//! w followed by normalisation: both are exact for a uniform rotation and differ by O(θ³) for
+//! angles θ in between. R_ij is the normalised sum of the two end nodes' quaternions — the
+//! geodesic midpoint of R_i and R_j, a proper rotation, at the cost of a few flops per edge
+//! instead of an SVD per edge.
 
 use std::time::Instant;
 
@@ -33,6 +36,27 @@ use crate::solve::{
     pcg, point_iteration, reverse_cuthill_mckee,
 };
 use crate::support::{SupKind, Support, Supports, place, point, tangent_constraint};
+
+/// With `DEFORM_TRACE` set: prints the seconds since `t` and the resident / peak memory
+/// (Linux /proc) for the set-up step `label` on stderr; restarts `t`.
+fn tr(label: &str, t: &mut Instant) {
+    if std::env::var_os("DEFORM_TRACE").is_some() {
+        let st = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+        let g = |k: &str| {
+            st.lines()
+                .find(|l| l.starts_with(k))
+                .unwrap_or("")
+                .to_string()
+        };
+        eprintln!(
+            "TRACE {label}: {:.3} s  {} {}",
+            t.elapsed().as_secs_f64(),
+            g("VmRSS"),
+            g("VmHWM")
+        );
+    }
+    *t = Instant::now();
+}
 
 /// Spring stiffness K_ij of the edge ij (lengths and volumes of the grid at the start of the
 /// increment).
@@ -480,41 +504,75 @@ fn springs<'a>(
 }
 
 /// A = spring matrix on the unknowns (rows in solver order, parallel, deterministic).
+///
+/// Two passes over the rows, both in parallel: the row lengths (unknown neighbours), then,
+/// per chunk of [`CHUNK`] rows, each row's entries written straight into its slice of the
+/// output and sorted by column there (one scratch buffer per chunk, no allocation per row).
+/// a_ii sums K_ij over the neighbours in adjacency order, whatever the thread count.
 fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> SymMatrix {
     let nu = sys.node_of.len();
-    let rows: Vec<(f64, Vec<(u32, f64)>)> = (0..nu)
-        .into_par_iter()
+    let is_unk = |j: u32| sys.unk_of[j as usize] != u32::MAX;
+    let lens: Vec<usize> = sys
+        .node_of
+        .par_iter()
         .with_min_len(CHUNK)
-        .map(|k| {
+        .map(|&i| {
+            adj.neighbours(i as usize)
+                .iter()
+                .filter(|&&j| is_unk(j))
+                .count()
+        })
+        .collect();
+    let mut offsets = Vec::with_capacity(nu + 1);
+    offsets.push(0usize);
+    let mut total = 0;
+    for l in lens {
+        total += l;
+        offsets.push(total);
+    }
+    let mut diag = vec![0.0; nu];
+    let mut cols = vec![0u32; total];
+    let mut vals = vec![0.0; total];
+    // One (rows, diagonal, columns, values) piece per chunk of rows.
+    let mut pieces = Vec::with_capacity(nu.div_ceil(CHUNK));
+    {
+        let (mut dr, mut cr, mut vr) = (&mut diag[..], &mut cols[..], &mut vals[..]);
+        for lo in (0..nu).step_by(CHUNK) {
+            let hi = (lo + CHUNK).min(nu);
+            let len = offsets[hi] - offsets[lo];
+            let (d, dt) = dr.split_at_mut(hi - lo);
+            let (c, ct) = cr.split_at_mut(len);
+            let (v, vt) = vr.split_at_mut(len);
+            pieces.push((lo, d, c, v));
+            (dr, cr, vr) = (dt, ct, vt);
+        }
+    }
+    pieces.into_par_iter().for_each(|(lo, d, c, v)| {
+        let base = offsets[lo];
+        let mut row: Vec<(u32, f64)> = Vec::new();
+        for (r, dk) in d.iter_mut().enumerate() {
+            let k = lo + r;
             let i = sys.node_of[k] as usize;
-            let mut d = 0.0;
-            let mut row = Vec::with_capacity(adj.neighbours(i).len());
+            let mut s = 0.0;
+            row.clear();
             for &j in adj.neighbours(i) {
                 let kij = sp.k(i, j as usize);
-                d += kij;
+                s += kij;
                 let u = sys.unk_of[j as usize];
                 if u != u32::MAX {
                     row.push((u, -kij));
                 }
             }
-            row.sort_by_key(|e| e.0);
-            (d, row)
-        })
-        .collect();
-    let mut diag = Vec::with_capacity(nu);
-    let mut offsets = Vec::with_capacity(nu + 1);
-    offsets.push(0);
-    let nnz: usize = rows.iter().map(|r| r.1.len()).sum();
-    let mut cols = Vec::with_capacity(nnz);
-    let mut vals = Vec::with_capacity(nnz);
-    for (d, row) in rows {
-        diag.push(d);
-        for (c, v) in row {
-            cols.push(c);
-            vals.push(v);
+            // Columns are distinct: the order is unique.
+            row.sort_unstable_by_key(|e| e.0);
+            *dk = s;
+            let at = offsets[k] - base;
+            for (q, &(cu, val)) in row.iter().enumerate() {
+                c[at + q] = cu;
+                v[at + q] = val;
+            }
         }
-        offsets.push(cols.len());
-    }
+    });
     SymMatrix {
         diag,
         offsets,
@@ -640,8 +698,11 @@ impl Base {
         } else {
             Vec::new()
         };
+        let mut tt = Instant::now();
         let sp = springs(mesh, x, opts.stiffness, adj, &moving);
+        tr("springs", &mut tt);
         let a = assemble(sys, adj, &sp);
+        tr("assemble", &mut tt);
         times.assemble += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let (a, pre) = match opts.solver {
@@ -655,6 +716,7 @@ impl Base {
             SolverKind::PointIteration => (Some(a), Pre::None),
         };
         times.precond += t.elapsed().as_secs_f64();
+        tr("precond", &mut tt);
         Ok(Self {
             a,
             pre,
@@ -825,23 +887,26 @@ fn step(
             }
         }
         if any_rot {
-            // Eq. 26 for the quaternion components, R = I as the start.
+            // Eq. 26 for the quaternions' vector part u (one three-component solve), u = 0
+            // (R = I) as the start; the scalar part follows from it, w = √(1 − |u|²) ≥ 0
+            // (the discrete maximum principle keeps |u| ≤ 1 up to the solver tolerance:
+            // clamped), so no second solve is needed (see the module doc).
             let bv = rhs(sys, adj, &sp, &qv, |_| [0.0; 3]);
-            let bw = rhs(sys, adj, &sp, &qw, |_| [0.0; 3]);
-            let nu = sys.node_of.len();
-            let mut xv = vec![[0.0; 3]; nu];
-            let mut xw = vec![[1.0, 0.0, 0.0]; nu];
-            let none = Constraints::default();
-            let rv = solve_one(a, &bv, &mut xv, &none, pre, opts, 1.0);
-            let rw = solve_one(a, &bw, &mut xw, &none, pre, opts, 1.0);
-            out.rot_iterations = rv.iterations + rw.iterations;
+            let mut xv = vec![[0.0; 3]; sys.node_of.len()];
+            let rv = solve_one(a, &bv, &mut xv, &Constraints::default(), pre, opts, 1.0);
+            drop(bv);
+            out.rot_iterations = rv.iterations;
             for (k, &i) in sys.node_of.iter().enumerate() {
-                let (v, w) = (xv[k], xw[k][0]);
-                let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + w * w).sqrt();
-                if l > 0.0 {
-                    qv[i as usize] = [v[0] / l, v[1] / l, v[2] / l];
-                    qw[i as usize] = [w / l, 0.0, 0.0];
-                }
+                let v = xv[k];
+                let s2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+                let (u, w) = if s2 <= 1.0 {
+                    (v, (1.0 - s2).sqrt())
+                } else {
+                    let l = s2.sqrt();
+                    ([v[0] / l, v[1] / l, v[2] / l], 0.0)
+                };
+                qv[i as usize] = u;
+                qw[i as usize] = [w, 0.0, 0.0];
             }
         }
     }
@@ -1230,14 +1295,19 @@ impl<'s> Deformer<'s> {
         let t = Instant::now();
         progress("setup", 0, 1);
         let renumber = opts.renumber && mesh.n_nodes() >= 2;
+        let mut tt = Instant::now();
         let (m2, bc2, sup2, perm, inv) = if renumber {
             // Validate in the user's numbering first, so that errors name the user's nodes.
             classify(mesh, bc, opts.plane_rel_tol, sup)?;
+            tr("classify1", &mut tt);
             let perm = spatial_order(&mesh.coords);
+            tr("morton", &mut tt);
             let mut m2 = mesh.clone();
+            tr("clone", &mut tt);
             m2.renumber_nodes(&perm).map_err(|e| Error::BadGraph {
                 reason: e.to_string(),
             })?;
+            tr("renumber", &mut tt);
             let bc2 = BoundaryConditions {
                 markers: bc.markers.clone(),
                 displacements: bc
@@ -1263,13 +1333,20 @@ impl<'s> Deformer<'s> {
         } else {
             (mesh.clone(), bc.clone(), sup.cloned(), None, Vec::new())
         };
+        tt = Instant::now();
         let cls = classify(&m2, &bc2, opts.plane_rel_tol, sup2.as_ref())?;
+        tr("classify2", &mut tt);
         let adj = Adjacency::build(&m2);
+        tr("adjacency", &mut tt);
         let sys = build_system(&cls, &adj, opts.renumber);
+        tr("build_system", &mut tt);
         times.setup = t.elapsed().as_secs_f64();
         let t = Instant::now();
+        tt = Instant::now();
         let q0 = cell_quality(&m2, &m2.coords);
+        tr("quality", &mut tt);
         let before = QualitySummary::of(&q0);
+        tr("summary", &mut tt);
         times.quality += t.elapsed().as_secs_f64();
         let base = if sys.node_of.is_empty() {
             None
