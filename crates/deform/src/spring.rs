@@ -364,7 +364,7 @@ struct Springs<'a> {
     kind: Stiffness,
     /// For [`Stiffness::Volume`]: V̄ / V_node per node; for [`Stiffness::WallDistance`]:
     /// the distance d_node to the moving boundary.
-    vol_factor: Vec<f64>,
+    vol_factor: std::borrow::Cow<'a, [f64]>,
     /// ℓ of [`Stiffness::WallDistance`].
     wall_len: f64,
 }
@@ -498,7 +498,7 @@ fn springs<'a>(
     Springs {
         x,
         kind,
-        vol_factor,
+        vol_factor: vol_factor.into(),
         wall_len,
     }
 }
@@ -581,9 +581,10 @@ fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> SymMatrix {
     }
 }
 
-/// b_k = Σ_{j prescribed} K_ij v_j (+ `extra(i)`), for a per-node field v.
-fn rhs<F>(sys: &System, adj: &Adjacency, sp: &Springs, v: &[V3], extra: F) -> Vec<V3>
+/// b_k = Σ_{j prescribed} K_ij v(j) (+ `extra(i)`), for a per-node field v.
+fn rhs<G, F>(sys: &System, adj: &Adjacency, sp: &Springs, v: G, extra: F) -> Vec<V3>
 where
+    G: Fn(usize) -> V3 + Sync,
     F: Fn(usize) -> V3 + Sync,
 {
     (0..sys.node_of.len())
@@ -595,7 +596,7 @@ where
             for &j in adj.neighbours(i) {
                 if sys.unk_of[j as usize] == u32::MAX {
                     let kij = sp.k(i, j as usize);
-                    let vj = v[j as usize];
+                    let vj = v(j as usize);
                     for q in 0..3 {
                         s[q] += kij * vj[q];
                     }
@@ -720,7 +721,7 @@ impl Base {
         Ok(Self {
             a,
             pre,
-            vol_factor: sp.vol_factor,
+            vol_factor: sp.vol_factor.into_owned(),
             wall_len: sp.wall_len,
         })
     }
@@ -784,7 +785,6 @@ fn step(
     let x0 = &mesh.coords;
     let n = cur.len();
     // Prescribed targets and displacements of this increment.
-    let mut disp: Vec<V3> = vec![[0.0; 3]; n];
     let mut target: Vec<[f64; 3]> = cur.to_vec();
     let mut max_disp = 0.0f64;
     for i in 0..n {
@@ -805,9 +805,9 @@ fn step(
             _ => continue,
         };
         target[i] = t;
-        disp[i] = [t[0] - cur[i][0], t[1] - cur[i][1], t[2] - cur[i][2]];
-        max_disp =
-            max_disp.max((disp[i][0].powi(2) + disp[i][1].powi(2) + disp[i][2].powi(2)).sqrt());
+        // The displacement target − cur (recomputed, not stored, by the right-hand side).
+        let d = [t[0] - cur[i][0], t[1] - cur[i][1], t[2] - cur[i][2]];
+        max_disp = max_disp.max((d[0].powi(2) + d[1].powi(2) + d[2].powi(2)).sqrt());
     }
     let mut out = StepOut {
         iterations: 0,
@@ -837,7 +837,7 @@ fn step(
     let sp = Springs {
         x: cur,
         kind: opts.stiffness,
-        vol_factor: base.vol_factor.clone(),
+        vol_factor: base.vol_factor.as_slice().into(),
         wall_len: base.wall_len,
     };
     let a = base.matrix();
@@ -891,7 +891,8 @@ fn step(
             // (R = I) as the start; the scalar part follows from it, w = √(1 − |u|²) ≥ 0
             // (the discrete maximum principle keeps |u| ≤ 1 up to the solver tolerance:
             // clamped), so no second solve is needed (see the module doc).
-            let bv = rhs(sys, adj, &sp, &qv, |_| [0.0; 3]);
+            drop((acc, touched));
+            let bv = rhs(sys, adj, &sp, |j| qv[j], |_| [0.0; 3]);
             let mut xv = vec![[0.0; 3]; sys.node_of.len()];
             let rv = solve_one(a, &bv, &mut xv, &Constraints::default(), pre, opts, 1.0);
             drop(bv);
@@ -915,7 +916,11 @@ fn step(
     // Eq. 21 right-hand side.
     let t = Instant::now();
     let cur_ro: &[[f64; 3]] = cur;
-    let b = rhs(sys, adj, &sp, &disp, |i| {
+    let disp = |j: usize| {
+        let (t, c) = (target[j], cur_ro[j]);
+        [t[0] - c[0], t[1] - c[1], t[2] - c[2]]
+    };
+    let b = rhs(sys, adj, &sp, disp, |i| {
         if !any_rot {
             return [0.0; 3];
         }

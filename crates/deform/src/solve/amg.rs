@@ -136,9 +136,11 @@ impl<'a> Amg<'a> {
             let ac = galerkin(cur, &p, &r);
             if trace {
                 eprintln!(
-                    "amg level {}: n {} -> {nagg}, aggregate {t_agg:.3} s, P {:.3} s, Pt {:.3} s, RAP {:.3} s",
+                    "amg level {}: n {} -> {nagg}, nnz(P) {}, nnz(A_c) {}, aggregate {t_agg:.3} s, P {:.3} s, Pt {:.3} s, RAP {:.3} s",
                     levels.len(),
                     cur.n(),
+                    p.cols.len(),
+                    ac.cols.len(),
                     t_p - t_agg,
                     t_r - t_p,
                     t0.elapsed().as_secs_f64() - t_r
@@ -513,7 +515,7 @@ fn concat_blocks(nrows: usize, ncols: usize, blocks: Vec<(Vec<usize>, Vec<u32>, 
 }
 
 /// Coarse rows per task of the Galerkin product.
-const GALERKIN_ROWS: usize = 512;
+const GALERKIN_ROWS: usize = 4096;
 
 /// A_c = R A P with R = Pᵀ, returned with its diagonal apart.
 ///
