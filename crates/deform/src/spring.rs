@@ -251,29 +251,33 @@ pub struct Deformed {
 /// grid's connectivity at coordinates `x`.
 pub fn cell_quality(mesh: &Mesh, x: &[[f64; 3]]) -> Vec<f64> {
     let signed = mesh.dim == 2;
-    let mut out = Vec::with_capacity(mesh.cells.len());
+    let mut out = vec![f64::NAN; mesh.cells.len()];
+    let mut at = 0;
     for g in mesh.cells.groups() {
         let nn = g.kind.n_nodes();
-        let part: Vec<f64> = g
-            .nodes
-            .par_chunks(nn * 1024)
-            .flat_map_iter(|c| {
-                c.chunks_exact(nn).map(|e| match g.kind {
-                    ElementKind::Tetra => mesh::quality::tet_quality([
-                        x[e[0] as usize],
-                        x[e[1] as usize],
-                        x[e[2] as usize],
-                        x[e[3] as usize],
-                    ]),
-                    ElementKind::Triangle => mesh::quality::triangle_quality(
-                        [x[e[0] as usize], x[e[1] as usize], x[e[2] as usize]],
-                        signed,
-                    ),
-                    _ => f64::NAN,
-                })
-            })
-            .collect();
-        out.extend(part);
+        let ne = g.nodes.len() / nn;
+        // Each cell's value written in place (no intermediate collection).
+        out[at..at + ne]
+            .par_chunks_mut(1024)
+            .zip(g.nodes.par_chunks(nn * 1024))
+            .for_each(|(q, c)| {
+                for (qe, e) in q.iter_mut().zip(c.chunks_exact(nn)) {
+                    *qe = match g.kind {
+                        ElementKind::Tetra => mesh::quality::tet_quality([
+                            x[e[0] as usize],
+                            x[e[1] as usize],
+                            x[e[2] as usize],
+                            x[e[3] as usize],
+                        ]),
+                        ElementKind::Triangle => mesh::quality::triangle_quality(
+                            [x[e[0] as usize], x[e[1] as usize], x[e[2] as usize]],
+                            signed,
+                        ),
+                        _ => f64::NAN,
+                    };
+                }
+            });
+        at += ne;
     }
     out
 }
