@@ -6,15 +6,38 @@
 //! ```
 //!
 //! `CASE_DIR` (default `fixtures/cases/default`) holds `case.ron` and `dv.ron`. The program
-//! evaluates the design vector twice (the first and a repeated evaluation), then the initial
-//! vector, and prints the phase times and the grid quality; the repeated evaluation gives the
-//! same grid bit for bit and the initial vector the baseline grid.
+//! evaluates the design vector `x` of `dv.ron` cold (first evaluation) and warm (second), then
+//! an optimiser-like step `1.01 x` warm and cold, then the initial vector, and prints the phase
+//! times and iterations of each.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use aeroshape::Study;
 use aeroshape::case::load_design_values;
+use aeroshape::study::Evaluation;
+
+fn show(label: &str, seconds: f64, ev: &Evaluation) {
+    let r = &ev.report;
+    println!(
+        "{label}: {seconds:.4} s (param {:.4}, model update {:.4}, surface grid {:.4}, deform {:.4} s with {} + {} (R) iterations); min quality {:.4} → {:.4}, {} inverted",
+        r.param.seconds,
+        r.model.seconds,
+        r.surface.seconds,
+        r.deform.seconds,
+        r.deform.iterations,
+        r.deform.rotation_iterations,
+        r.quality_before.min,
+        r.quality_after.min,
+        r.quality_after.inverted
+    );
+}
+
+fn timed(study: &Study, x: &[f64]) -> Result<(f64, Evaluation), aeroshape::study::StudyError> {
+    let t = Instant::now();
+    let ev = study.evaluate(x)?;
+    Ok((t.elapsed().as_secs_f64(), ev))
+}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::env::args()
@@ -32,26 +55,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s.wall_nodes
     );
     let x = study.vector_from_values(&load_design_values(&dir.join("dv.ron"))?)?;
-    let mut grids = Vec::new();
-    for label in ["first evaluate", "second evaluate"] {
-        let t = Instant::now();
-        let ev = study.evaluate(&x)?;
-        let r = &ev.report;
-        println!(
-            "{label}: {:.4} s wall clock (param {:.4}, model update {:.4}, surface grid {:.4}, deform {:.4} s with {} iterations); min quality {:.4} → {:.4}, {} inverted",
-            t.elapsed().as_secs_f64(),
-            r.param.seconds,
-            r.model.seconds,
-            r.surface.seconds,
-            r.deform.seconds,
-            r.deform.iterations,
-            r.quality_before.min,
-            r.quality_after.min,
-            r.quality_after.inverted
-        );
-        grids.push(ev.grid.coords);
-    }
-    println!("repeated evaluation identical: {}", grids[0] == grids[1]);
+    let (t1, first) = timed(&study, &x)?;
+    show("first evaluate (cold)", t1, &first);
+    let (t2, second) = timed(&study, &x)?;
+    show("second evaluate (warm, same x)", t2, &second);
+    println!("first / second: {:.1}×", t1 / t2);
+    let step: Vec<f64> = x.iter().map(|v| 1.01 * v).collect();
+    let (tw, warm) = timed(&study, &step)?;
+    show("step 1.01 x (warm)", tw, &warm);
+    study.forget_warm_start();
+    let (tc, cold) = timed(&study, &step)?;
+    show("step 1.01 x (cold)", tc, &cold);
+    let diff = warm
+        .grid
+        .coords
+        .iter()
+        .zip(&cold.grid.coords)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    println!("step warm vs cold: largest coordinate difference {diff:.2e}");
     let zero = study.evaluate(&study.initial())?;
     println!(
         "initial design vector gives the baseline grid bit for bit: {}",

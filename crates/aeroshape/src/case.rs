@@ -126,6 +126,9 @@ pub struct DeformSettings {
     pub min_quality_ratio: f64,
     /// Largest number of increments.
     pub max_increments: usize,
+    /// Start each evaluation's solves from the previous evaluation's solution (see
+    /// `aeroshape::study`); `false`: from the baseline, bit for bit history independent.
+    pub warm_start: bool,
 }
 
 impl Default for DeformSettings {
@@ -139,6 +142,7 @@ impl Default for DeformSettings {
             max_iters: d.max_iters,
             min_quality_ratio: d.min_quality_ratio,
             max_increments: d.max_increments,
+            warm_start: true,
         }
     }
 }

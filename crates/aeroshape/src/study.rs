@@ -18,9 +18,23 @@
 //! Built once in [`Study::new`] and reused by every evaluation: the geometry and its curve
 //! seeds for the update, the bound parametrisation, the baseline grid and its classification
 //! on the geometry (wall nodes with their support entity and parameters), the baseline cell
-//! quality. Every evaluation starts from the baseline (nothing of one evaluation is kept for
-//! the next), so `evaluate(x)` does not depend on what was evaluated before; the zero
-//! perturbation (the initial design vector) gives back the baseline grid bit for bit.
+//! quality, the volume-deformation set-up (node classification, ordering, baseline spring
+//! matrix and its multigrid hierarchy). The harmonic re-map of each surface-grid component is
+//! factorised the first time that component is re-mapped and reused afterwards.
+//!
+//! **Warm start.** An optimiser evaluates nearby design vectors one after the other, so each
+//! evaluation starts the solves of the volume deformation (R of Eq. 26, Δx of Eq. 21, the
+//! parameters of the nodes sliding on supports) from the solution of the previous one
+//! (`deform.warm_start` in the case, on by default). The answer then depends on the call
+//! history only below the solver tolerances (relative residual `deform.rel_tol`, sliding
+//! update 1e-9 of the wall motion): evaluating the same vector twice gives the same grid to
+//! round-off, the second time without a solver iteration. An evaluation where no wall node
+//! moves (the initial design vector) returns the baseline grid bit for bit and resets the warm
+//! start, so `x`, initial, `x` gives the same grid twice bit for bit. With
+//! `warm_start: false` every evaluation starts from the baseline and `evaluate(x)` is bit for
+//! bit independent of the history; [`Study::forget_warm_start`] does the same for one call.
+//! Evaluations from several threads at once are safe; each starts from whichever solution
+//! was stored last.
 //!
 //! ```no_run
 //! use aeroshape::study::Study;
@@ -34,6 +48,7 @@
 //! A runnable version: `cargo run --release -p aeroshape --example study`.
 
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
 
 use geom_db::GeomDb;
@@ -258,12 +273,16 @@ pub struct Study {
     prepared: Prepared,
     grid: Mesh,
     surface: SurfaceGrid,
+    /// The surface-grid update's reusable part (factorised re-maps).
+    surface_updater: surfgrid::Updater,
     wall: Vec<bool>,
     fixed_nodes: Vec<u32>,
     /// The volume deformation set-up (classification, ordering, baseline stiffness and
     /// multigrid hierarchy), built once; prescribed nodes: the wall nodes in index order, then
     /// `fixed_nodes`.
     deformer: deform::Deformer<'static>,
+    /// The last volume deformation, the warm start of the next one (None: start cold).
+    last: Mutex<Option<Arc<deform::Deformed>>>,
     quality: Vec<f64>,
     setup: SetupReport,
 }
@@ -534,10 +553,12 @@ impl Study {
             model,
             prepared,
             grid,
+            surface_updater: surfgrid::Updater::new(&surface),
             surface,
             wall,
             fixed_nodes,
             deformer,
+            last: Mutex::new(None),
             quality,
             setup,
         })
@@ -595,6 +616,11 @@ impl Study {
             .registry()
             .vector_from_values(values)
             .map_err(phase("design vector"))
+    }
+
+    /// Makes the next evaluation start its solves from the baseline (see the module doc).
+    pub fn forget_warm_start(&self) {
+        *self.last.lock().unwrap_or_else(PoisonError::into_inner) = None;
     }
 
     /// Runs the chain for the design vector `x` (one value per design variable, in the
@@ -655,13 +681,15 @@ impl Study {
         // 3. surface grid at frozen parameters
         progress("surface grid");
         let t = Instant::now();
-        let (surface, sr) = surfgrid::update(
-            &self.surface,
-            &self.db,
-            &geometry,
-            &self.case.surface_grid.update_options(),
-        )
-        .map_err(phase("surface grid"))?;
+        let (surface, sr) = self
+            .surface_updater
+            .update(
+                &self.surface,
+                &self.db,
+                &geometry,
+                &self.case.surface_grid.update_options(),
+            )
+            .map_err(phase("surface grid"))?;
         let surf_phase = SurfacePhase {
             seconds: t.elapsed().as_secs_f64(),
             moved_nodes: sr.moved_nodes,
@@ -689,14 +717,26 @@ impl Study {
         }
         displacements.resize(displacements.len() + self.fixed_nodes.len(), [0.0; 3]);
         let mut grid = self.grid.clone();
+        let warm_start = self.case.deform.warm_start;
         let deform_phase = if any {
-            // The set-up is reused; no warm start from an earlier evaluation, so the answer
-            // does not depend on the call history (bit for bit the cold `deform::deform`).
+            // The set-up is reused; the solves start from the previous solution if warm.
+            let warm = if warm_start {
+                self.last
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner)
+                    .clone()
+            } else {
+                None
+            };
             let d = self
                 .deformer
-                .deform(&displacements, None)
+                .deform(&displacements, warm.as_deref())
                 .map_err(phase("deform"))?;
-            grid.coords = d.coords;
+            grid.coords.clone_from(&d.coords);
+            let d = Arc::new(d);
+            if warm_start {
+                *self.last.lock().unwrap_or_else(PoisonError::into_inner) = Some(d.clone());
+            }
             // wall nodes exactly at their new position on the geometry
             for (i, w) in self.wall.iter().enumerate() {
                 if *w {
@@ -713,9 +753,11 @@ impl Study {
                 increments: d.report.increments,
                 unknowns: d.report.unknowns,
                 sliding: d.report.sliding,
-                notes: d.report.notes,
+                notes: d.report.notes.clone(),
             }
         } else {
+            // The solution is Δx = 0: the next evaluation starts cold.
+            self.forget_warm_start();
             DeformPhase {
                 seconds: t.elapsed().as_secs_f64(),
                 skipped: true,

@@ -162,6 +162,41 @@ fn no_state_leaks_between_evaluations() {
     assert_eq!(a.grid.coords, b.grid.coords);
 }
 
+/// Largest coordinate difference of two grids.
+fn max_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn warm_start_agrees_with_a_cold_evaluation_and_saves_the_solves() {
+    let (s, x) = study("default");
+    // A nearby vector first, as an optimiser's previous step.
+    let near: Vec<f64> = x.iter().map(|v| 0.9 * v).collect();
+    s.evaluate(&near).unwrap();
+    let warm = s.evaluate(&x).unwrap();
+    s.forget_warm_start();
+    let cold = s.evaluate(&x).unwrap();
+    let r = (&warm.report.deform, &cold.report.deform);
+    assert!(
+        r.0.iterations + r.0.rotation_iterations < r.1.iterations + r.1.rotation_iterations,
+        "warm {r:?}"
+    );
+    // The solves stop at a relative residual of 1e-8 and the sliding at 1e-9 of the motion:
+    // the two answers agree far below the wall motion (0.3 at most).
+    let err = max_difference(&warm.grid.coords, &cold.grid.coords);
+    assert!(err < 1e-7, "warm vs cold: {err:.3e}");
+    assert_eq!(warm.report.quality_after.inverted, 0);
+    // The same vector again: no solver iteration, the same grid to round-off.
+    let again = s.evaluate(&x).unwrap();
+    assert_eq!(again.report.deform.iterations, 0);
+    assert_eq!(again.report.deform.rotation_iterations, 0);
+    let err = max_difference(&again.grid.coords, &cold.grid.coords);
+    assert!(err < 1e-13, "repeat: {err:.3e}");
+}
+
 #[test]
 fn wrong_length_design_vector_is_an_error() {
     let (s, _) = study("sphere");

@@ -162,7 +162,8 @@ pub(crate) struct Classified {
     pub roles: Vec<NodeRole>,
     pub motions: Vec<RigidMotion>,
     pub planes: Vec<PlaneInfo>,
-    /// Skin elements of the moving markers (node lists: triangles in 3D, segments in 2D).
+    /// Skin elements: those of the moving markers and the marker elements whose nodes all
+    /// have prescribed displacements (node lists: triangles in 3D, segments in 2D).
     pub skin: Vec<Vec<u32>>,
     /// Nodes sliding on geometry supports, with their initial parameters.
     pub supports: Vec<SupNode>,
@@ -391,14 +392,7 @@ pub(crate) fn classify(
                     }
                     roles[v as usize] = NodeRole::Rigid(idx);
                 }
-                match g.kind {
-                    ElementKind::Line | ElementKind::Triangle => skin.push(e.to_vec()),
-                    ElementKind::Quad => {
-                        skin.push(vec![e[0], e[1], e[2]]);
-                        skin.push(vec![e[0], e[2], e[3]]);
-                    }
-                    _ => {}
-                }
+                push_skin(&mut skin, g.kind, e);
             }
         }
     }
@@ -416,6 +410,22 @@ pub(crate) fn classify(
             });
         }
         roles[v as usize] = NodeRole::Displaced(k);
+    }
+    // Skin of the prescribed displacements: the elements of the other markers whose nodes
+    // all have one (a wall moved by the surface-grid update carries R like a rigid marker).
+    for (k, m) in mesh.markers.iter().enumerate() {
+        if matches!(role_of_marker[k], Some(MarkerRole::Rigid(_))) {
+            continue;
+        }
+        for g in m.elements.groups() {
+            for e in g.iter() {
+                if e.iter()
+                    .all(|&v| matches!(roles[v as usize], NodeRole::Displaced(_)))
+                {
+                    push_skin(&mut skin, g.kind, e);
+                }
+            }
+        }
     }
     // Sliding nodes overridden by a motion are no longer sliding.
     let supports = supports
@@ -437,6 +447,19 @@ pub(crate) fn classify(
         skin,
         supports,
     })
+}
+
+/// Adds a boundary element to the skin: segments and triangles as they are, a quadrilateral
+/// as two triangles; other kinds carry no surface frame.
+fn push_skin(skin: &mut Vec<Vec<u32>>, kind: ElementKind, e: &[u32]) {
+    match kind {
+        ElementKind::Line | ElementKind::Triangle => skin.push(e.to_vec()),
+        ElementKind::Quad => {
+            skin.push(vec![e[0], e[1], e[2]]);
+            skin.push(vec![e[0], e[2], e[3]]);
+        }
+        _ => {}
+    }
 }
 
 /// A node of a support-sliding marker: its support (`None`: frozen) and parameters.

@@ -242,17 +242,25 @@ pub fn summary(q: &[f64]) -> Summary {
     }
     let mean = v.iter().sum::<f64>() / measured as f64;
     let n_nonpositive = v.iter().filter(|&&x| x <= 0.0).count();
-    // The values a full sort would put first, at `rank` and last, found in linear time.
-    let min = v.iter().copied().min_by(f64::total_cmp).unwrap_or(f64::NAN);
-    let max = v.iter().copied().max_by(f64::total_cmp).unwrap_or(f64::NAN);
+    let min = v
+        .iter()
+        .copied()
+        .min_by(f64::total_cmp)
+        .expect("measured > 0");
+    let max = v
+        .iter()
+        .copied()
+        .max_by(f64::total_cmp)
+        .expect("measured > 0");
+    // The value of rank ⌈n/100⌉ in increasing order (a selection, not a sort).
     let rank = ((0.01 * measured as f64).ceil() as usize).max(1) - 1;
-    let p1 = *v.select_nth_unstable_by(rank, f64::total_cmp).1;
+    let (_, p1, _) = v.select_nth_unstable_by(rank, f64::total_cmp);
     Summary {
         count: q.len(),
         measured,
         min,
         mean,
-        p1,
+        p1: *p1,
         max,
         n_nonpositive,
     }

@@ -12,10 +12,16 @@
 //!    nodes are re-evaluated at their frozen (u, v) (Eq. 7). Otherwise the parametric
 //!    displacement δ of the interior nodes solves the graph Laplace problem
 //!    Σ_{j ∈ N(i)} (δ_j − δ_i) = 0 with the boundary displacements as Dirichlet data
-//!    (conjugate gradients to a relative residual of 1e-8), and smoothing passes in (u, v) follow until no triangle is
-//!    inverted and the worst quality is back to the given fraction of the initial one.
+//!    ([`crate::harmonic`]: factorised once per component), and smoothing passes in (u, v)
+//!    follow until no triangle is inverted and the worst quality is back to the given
+//!    fraction of the initial one.
 //!
 //! Connectivity never changes. Zero model change gives the grid back bit for bit.
+//!
+//! [`Updater`] keeps what depends only on the grid (the factorised re-maps) between updates
+//! of the same grid, as an optimisation loop makes them; [`update`] is the one-shot form.
+
+use std::sync::OnceLock;
 
 use rayon::prelude::*;
 
@@ -26,6 +32,7 @@ use intersect::project::{ProjectOptions, SurfaceProjector};
 
 use crate::error::{Error, Result};
 use crate::grid::{NodeSupport, SurfaceGrid};
+use crate::harmonic::HarmonicMap;
 use crate::smooth::{Improve, orient, quality3};
 
 /// Knobs of the update.
@@ -106,79 +113,6 @@ pub fn evaluate_frozen(grid: &SurfaceGrid, db: &GeomDb) -> Vec<Point3> {
         .collect()
 }
 
-/// Harmonic re-map: displacement of the free nodes (index ≥ `n_fixed`) solving the graph
-/// Laplace equation with the fixed nodes' displacements `d` as Dirichlet data (CG).
-fn harmonic(tris: &[[u32; 3]], n_fixed: usize, d: &mut [[f64; 2]]) {
-    let n = d.len();
-    let mut nb: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for t in tris {
-        for i in 0..3 {
-            let (a, b) = (t[i], t[(i + 1) % 3]);
-            nb[a as usize].push(b);
-            nb[b as usize].push(a);
-        }
-    }
-    for l in &mut nb {
-        l.sort_unstable();
-        l.dedup();
-    }
-    let m = n - n_fixed;
-    if m == 0 {
-        return;
-    }
-    for comp in 0..2 {
-        // A x = b on free nodes: A = degree − adjacency (free), b = Σ fixed neighbours
-        let apply = |x: &[f64], y: &mut [f64]| {
-            for i in 0..m {
-                let v = i + n_fixed;
-                let mut s = nb[v].len() as f64 * x[i];
-                for &w in &nb[v] {
-                    if (w as usize) >= n_fixed {
-                        s -= x[w as usize - n_fixed];
-                    }
-                }
-                y[i] = s;
-            }
-        };
-        let mut b = vec![0.0; m];
-        for i in 0..m {
-            for &w in &nb[i + n_fixed] {
-                if (w as usize) < n_fixed {
-                    b[i] += d[w as usize][comp];
-                }
-            }
-        }
-        let mut x = vec![0.0; m];
-        let mut r = b.clone();
-        let mut p = r.clone();
-        let mut ap = vec![0.0; m];
-        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-        let mut rr = dot(&r, &r);
-        // relative residual 1e-8: smoothing follows, so a more accurate map buys nothing
-        let tol = 1e-16 * dot(&b, &b).max(1e-300);
-        for _ in 0..(m + 100).min(20_000) {
-            if rr <= tol {
-                break;
-            }
-            apply(&p, &mut ap);
-            let alpha = rr / dot(&p, &ap);
-            for i in 0..m {
-                x[i] += alpha * p[i];
-                r[i] -= alpha * ap[i];
-            }
-            let rr2 = dot(&r, &r);
-            let beta = rr2 / rr;
-            rr = rr2;
-            for i in 0..m {
-                p[i] = r[i] + beta * p[i];
-            }
-        }
-        for i in 0..m {
-            d[i + n_fixed][comp] = x[i];
-        }
-    }
-}
-
 /// Updates `grid` (made on `old`) to the model `new` (the same topology after a model
 /// update): see the module doc.
 pub fn update(
@@ -186,6 +120,61 @@ pub fn update(
     old: &GeomDb,
     new: &GeomDb,
     opts: &UpdateOptions,
+) -> Result<(SurfaceGrid, UpdateReport)> {
+    Updater::new(grid).update(grid, old, new, opts)
+}
+
+/// The reusable part of [`update`] for one grid: each component's harmonic re-map,
+/// factorised the first time the component is re-mapped and kept for later updates. The
+/// answer is bit for bit that of [`update`].
+#[derive(Debug)]
+pub struct Updater {
+    /// Node and triangle counts per component (checks that a grid is the one set up).
+    shape: Vec<(usize, usize, usize)>,
+    maps: Vec<OnceLock<HarmonicMap>>,
+}
+
+impl Updater {
+    /// An updater for `grid` (nothing is factorised yet).
+    pub fn new(grid: &SurfaceGrid) -> Self {
+        Self {
+            shape: grid
+                .components
+                .iter()
+                .map(|c| (c.nodes.len(), c.n_boundary, c.triangles.len()))
+                .collect(),
+            maps: grid.components.iter().map(|_| OnceLock::new()).collect(),
+        }
+    }
+
+    /// [`update`] of `grid`, the grid this updater was made for.
+    pub fn update(
+        &self,
+        grid: &SurfaceGrid,
+        old: &GeomDb,
+        new: &GeomDb,
+        opts: &UpdateOptions,
+    ) -> Result<(SurfaceGrid, UpdateReport)> {
+        let shape: Vec<_> = grid
+            .components
+            .iter()
+            .map(|c| (c.nodes.len(), c.n_boundary, c.triangles.len()))
+            .collect();
+        if shape != self.shape {
+            return Err(Error::Mismatch {
+                what: "the grid is not the one the updater was made for".into(),
+            });
+        }
+        update_with(grid, old, new, opts, &self.maps)
+    }
+}
+
+fn update_with(
+    grid: &SurfaceGrid,
+    old: &GeomDb,
+    new: &GeomDb,
+    opts: &UpdateOptions,
+    maps: &[OnceLock<HarmonicMap>],
 ) -> Result<(SurfaceGrid, UpdateReport)> {
     if old.corners.len() != new.corners.len()
         || old.curve_components.len() != new.curve_components.len()
@@ -269,7 +258,9 @@ pub fn update(
                     }
                 })
                 .collect();
-            harmonic(&cg.triangles, nb, &mut d);
+            maps[ci]
+                .get_or_init(|| HarmonicMap::new(&cg.triangles, cg.nodes.len(), nb))
+                .solve(&mut d);
             for k in nb..uv.len() {
                 uv[k] = [cg.uv[k][0] + d[k][0], cg.uv[k][1] + d[k][1]];
             }

@@ -87,7 +87,7 @@ fn deformer_warm_start_agrees_to_tolerance_and_saves_iterations() {
     let first = d.deform(&values(&bc(&m, 1.0)), None).unwrap();
     let b2 = bc(&m, 1.05);
     let cold = deform(&m, &b2, &opts).unwrap();
-    let warm = d.deform(&values(&b2), Some(&first.coords)).unwrap();
+    let warm = d.deform(&values(&b2), Some(&first)).unwrap();
     let dmax = b2
         .displacements
         .iter()
@@ -109,6 +109,26 @@ fn deformer_warm_start_agrees_to_tolerance_and_saves_iterations() {
         warm.report.iterations,
         cold.report.iterations
     );
+}
+
+#[test]
+fn deformer_warm_start_from_the_same_motion_takes_no_iteration() {
+    let m = grid();
+    let b = bc(&m, 1.0);
+    let d = Deformer::new(&m, &b, &DeformOptions::default()).unwrap();
+    let first = d.deform(&values(&b), None).unwrap();
+    assert!(first.report.iterations > 0 && first.report.rotation_iterations > 0);
+    let again = d.deform(&values(&b), Some(&first)).unwrap();
+    assert_eq!(again.report.iterations, 0);
+    assert_eq!(again.report.rotation_iterations, 0);
+    // The same answer up to the round-off of re-applying the plane constraints.
+    let err = again
+        .coords
+        .iter()
+        .zip(&first.coords)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    assert!(err <= 1e-15, "{err:.3e}");
 }
 
 #[test]
@@ -139,9 +159,18 @@ fn deformer_refuses_wrong_input() {
     v[3][1] = f64::NAN;
     let e = d.deform(&v, None).unwrap_err().to_string();
     assert!(e.contains("not finite"), "{e}");
-    let e = d
-        .deform(&values(&b), Some(&m.coords[1..]))
-        .unwrap_err()
-        .to_string();
+    // A result of another set-up (other grid) is no warm start for this one.
+    let small = deform::generate::box_with_block(
+        [6, 5, 6],
+        [0.0; 3],
+        [2.0, 1.2, 1.6],
+        [2, 0, 2],
+        [4, 3, 4],
+    );
+    let other = Deformer::new(&small, &bc(&small, 1.0), &DeformOptions::default())
+        .unwrap()
+        .deform(&values(&bc(&small, 1.0)), None)
+        .unwrap();
+    let e = d.deform(&values(&b), Some(&other)).unwrap_err().to_string();
     assert!(e.contains("warm start"), "{e}");
 }

@@ -47,12 +47,18 @@ fn wing_body_after_fuselage_radius_change() {
     assert_eq!(rep0.moved_nodes, 0);
     assert!(g0 == g);
     let st0 = surfgrid::grid_stats(&g, &field);
+    // One updater for all the changes below: its factorised re-maps are reused.
+    let updater = surfgrid::Updater::new(&g);
     for k in [1.05, 0.95] {
         // scale the fuselage about its axis (the x axis: the nose and tail poles stay)
         let nodes = move_surface_nodes(&db, fus, |p| Point3::new(p.x, p.y * k, p.z * k));
         let (new, _) = base.update(&nodes).unwrap();
         let (g2, rep) = update(&g, &db, &new, &UpdateOptions::default()).unwrap();
         eprintln!("fuselage ×{k}: {rep:?}");
+        let (g3, rep3) = updater
+            .update(&g, &db, &new, &UpdateOptions::default())
+            .unwrap();
+        assert!(g3 == g2 && rep3 == rep, "reuse changes nothing");
         assert!(rep.moved_nodes > 0);
         let remapped = rep.components.iter().filter(|c| c.remapped).count();
         assert!(
@@ -65,6 +71,13 @@ fn wing_body_after_fuselage_radius_change() {
         }
         // valid grid on the new model: orientation, support, conformity, fans at the poles
         check_grid(&new, &g2, false);
+        // an updater refuses another grid
+        let other = generate(&db, &wing_body_field(&db, 0.3), &GenerateOptions::default()).unwrap();
+        assert!(
+            updater
+                .update(&other, &db, &new, &UpdateOptions::default())
+                .is_err()
+        );
         let st = surfgrid::grid_stats(&g2, &field);
         assert!(
             st.worst_quality >= 0.9 * st0.worst_quality,
