@@ -11,7 +11,7 @@ use std::time::SystemTime;
 use serde_json::Value;
 
 /// The crates with a `[[bench]]` target named after the crate, in layer order.
-const BENCHED: [&str; 8] = [
+const BENCHED: [&str; 9] = [
     "iges",
     "geom-db",
     "mesh",
@@ -20,6 +20,7 @@ const BENCHED: [&str; 8] = [
     "surfgrid",
     "deform",
     "wingmaster",
+    "aeroshape",
 ];
 
 /// One benchmark result of this run.

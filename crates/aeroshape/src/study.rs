@@ -276,6 +276,7 @@ pub struct Study {
     /// The surface-grid update's reusable part (factorised re-maps).
     surface_updater: surfgrid::Updater,
     wall: Vec<bool>,
+    wall_cells: WallCells,
     fixed_nodes: Vec<u32>,
     /// The volume deformation set-up (classification, ordering, baseline stiffness and
     /// multigrid hierarchy), built once; prescribed nodes: the wall nodes in index order, then
@@ -284,7 +285,51 @@ pub struct Study {
     /// The last volume deformation, the warm start of the next one (None: start cold).
     last: Mutex<Option<Arc<deform::Deformed>>>,
     quality: Vec<f64>,
+    quality_before: Quality,
     setup: SetupReport,
+}
+
+/// The cells with a wall node (canonical index, kind, nodes).
+#[derive(Debug, Default)]
+struct WallCells {
+    index: Vec<u32>,
+    kind: Vec<ElementKind>,
+    start: Vec<usize>,
+    nodes: Vec<u32>,
+}
+
+impl WallCells {
+    fn new(grid: &Mesh, wall: &[bool]) -> Self {
+        let mut w = WallCells {
+            start: vec![0],
+            ..Default::default()
+        };
+        let mut k = 0u32;
+        for g in grid.cells.groups() {
+            for e in g.nodes.chunks_exact(g.kind.n_nodes()) {
+                if e.iter().any(|&v| wall[v as usize]) {
+                    w.index.push(k);
+                    w.kind.push(g.kind);
+                    w.nodes.extend_from_slice(e);
+                    w.start.push(w.nodes.len());
+                }
+                k += 1;
+            }
+        }
+        w
+    }
+
+    /// Recomputes in `q` the quality of the cells with a node flagged in `changed`.
+    fn refresh(&self, grid: &Mesh, changed: &[bool], q: &mut [f64]) {
+        let signed = grid.dim == 2;
+        for (c, &cell) in self.index.iter().enumerate() {
+            let e = &self.nodes[self.start[c]..self.start[c + 1]];
+            if e.iter().any(|&v| changed[v as usize]) {
+                q[cell as usize] =
+                    mesh::quality::element_quality(self.kind[c], e, &grid.coords, signed);
+            }
+        }
+    }
 }
 
 impl std::fmt::Debug for Study {
@@ -535,6 +580,7 @@ impl Study {
             path: grid_path.display().to_string(),
             message: format!("volume deformation set-up: {e}"),
         })?;
+        let wall_cells = WallCells::new(&grid, &wall);
         let setup = SetupReport {
             read,
             param: t_param,
@@ -555,10 +601,12 @@ impl Study {
             grid,
             surface_updater: surfgrid::Updater::new(&surface),
             surface,
+            wall_cells,
             wall,
             fixed_nodes,
             deformer,
             last: Mutex::new(None),
+            quality_before: Quality::of(&quality),
             quality,
             setup,
         })
@@ -717,6 +765,7 @@ impl Study {
         }
         displacements.resize(displacements.len() + self.fixed_nodes.len(), [0.0; 3]);
         let mut grid = self.grid.clone();
+        let mut deformed_quality = None;
         let warm_start = self.case.deform.warm_start;
         let deform_phase = if any {
             // The set-up is reused; the solves start from the previous solution if warm.
@@ -737,13 +786,24 @@ impl Study {
             if warm_start {
                 *self.last.lock().unwrap_or_else(PoisonError::into_inner) = Some(d.clone());
             }
-            // wall nodes exactly at their new position on the geometry
+            // Wall nodes exactly at their new position on the geometry (they differ from the
+            // deformation's x0 + d by round-off at most): the cells of a node that changed get
+            // their quality again.
+            let mut changed = vec![false; grid.n_nodes()];
             for (i, w) in self.wall.iter().enumerate() {
                 if *w {
-                    let p = surface.coords[i];
-                    grid.coords[i] = [p.x, p.y, p.z];
+                    let p = [
+                        surface.coords[i].x,
+                        surface.coords[i].y,
+                        surface.coords[i].z,
+                    ];
+                    changed[i] = grid.coords[i] != p;
+                    grid.coords[i] = p;
                 }
             }
+            let mut q = d.cell_quality.clone();
+            self.wall_cells.refresh(&grid, &changed, &mut q);
+            deformed_quality = Some(q);
             DeformPhase {
                 seconds: t.elapsed().as_secs_f64(),
                 skipped: false,
@@ -781,11 +841,7 @@ impl Study {
                 }
             }
         }
-        let cell_quality = if any {
-            mesh::quality::cell_quality(&grid)
-        } else {
-            self.quality.clone()
-        };
+        let cell_quality = deformed_quality.unwrap_or_else(|| self.quality.clone());
         let mut wall_support: f64 = 0.0;
         for (i, w) in self.wall.iter().enumerate() {
             if *w {
@@ -806,7 +862,7 @@ impl Study {
             surface: surf_phase,
             deform: deform_phase,
             seconds: t_all.elapsed().as_secs_f64(),
-            quality_before: Quality::of(&self.quality),
+            quality_before: self.quality_before,
             quality_after: Quality::of(&cell_quality),
             wall_support_rel: wall_support,
         };

@@ -113,6 +113,14 @@ fn check_design_vector(case: &str, s: &Study, x: &[f64]) {
     assert!(r.param.nodes_moved > 0 && r.surface.moved_nodes > 0);
     assert!(!r.deform.skipped && r.deform.iterations > 0);
     assert_eq!(r.quality_after.inverted, 0, "{case}: {r:#?}");
+    // the reported cell quality is that of the returned grid, bit for bit
+    let q = mesh::quality::cell_quality(&ev.grid);
+    assert!(
+        q.iter()
+            .zip(&ev.cell_quality)
+            .all(|(a, b)| a.to_bits() == b.to_bits()),
+        "{case}: cell quality of the returned grid"
+    );
     // the wall moved by a visible amount
     let moved = ev
         .grid

@@ -22,7 +22,7 @@
 
 use std::time::Instant;
 
-use mesh::{Adjacency, ElementKind, Mesh};
+use mesh::{Adjacency, Mesh};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -243,6 +243,9 @@ pub struct Deformed {
     /// Final supports and parameters of the nodes that slid on geometry supports (input
     /// numbering; empty without [`crate::MarkerRole::SlideOnSupport`]).
     pub supports: Vec<(u32, Support)>,
+    /// Signed quality of every cell at `coords` ([`cell_quality`], canonical order): the
+    /// field the guard checked.
+    pub cell_quality: Vec<f64>,
     /// What was done.
     pub report: DeformReport,
     /// The solver state of this result, the warm start of a later [`Deformer::deform`].
@@ -269,36 +272,7 @@ struct SolverState {
 /// Signed quality of every cell (canonical order; NaN for kinds without a measure) for the
 /// grid's connectivity at coordinates `x`.
 pub fn cell_quality(mesh: &Mesh, x: &[[f64; 3]]) -> Vec<f64> {
-    let signed = mesh.dim == 2;
-    let mut out = vec![f64::NAN; mesh.cells.len()];
-    let mut at = 0;
-    for g in mesh.cells.groups() {
-        let nn = g.kind.n_nodes();
-        let ne = g.nodes.len() / nn;
-        // Each cell's value written in place (no intermediate collection).
-        out[at..at + ne]
-            .par_chunks_mut(1024)
-            .zip(g.nodes.par_chunks(nn * 1024))
-            .for_each(|(q, c)| {
-                for (qe, e) in q.iter_mut().zip(c.chunks_exact(nn)) {
-                    *qe = match g.kind {
-                        ElementKind::Tetra => mesh::quality::tet_quality([
-                            x[e[0] as usize],
-                            x[e[1] as usize],
-                            x[e[2] as usize],
-                            x[e[3] as usize],
-                        ]),
-                        ElementKind::Triangle => mesh::quality::triangle_quality(
-                            [x[e[0] as usize], x[e[1] as usize], x[e[2] as usize]],
-                            signed,
-                        ),
-                        _ => f64::NAN,
-                    };
-                }
-            });
-        at += ne;
-    }
-    out
+    mesh::quality::cell_quality_at(mesh, x)
 }
 
 /// The `k` worst cells as "id (q = …)".
@@ -1661,6 +1635,7 @@ impl<'s> Deformer<'s> {
             return Ok(Deformed {
                 coords: cur,
                 supports,
+                cell_quality: q1,
                 report,
                 state,
             });

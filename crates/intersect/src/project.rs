@@ -30,6 +30,8 @@
 //! Batches run in parallel with rayon; each point is independent, so results are identical for
 //! any number of threads.
 
+use std::sync::OnceLock;
+
 use crate::bvh::{Aabb, Bvh};
 use crate::error::{Error, Result};
 use crate::newton::{self, Eval, Problem, Settings};
@@ -204,7 +206,9 @@ impl SurfCell {
 }
 
 /// Foot-of-the-normal search on one surface: the seeding hierarchy is built once (it depends
-/// only on the surface) and reused for every point.
+/// only on the surface) and reused for every point. With a length scale in the options it is
+/// built at the first global search, so a projector used only for local Newton
+/// ([`SurfaceProjector::project_from`]) never pays for it.
 pub struct SurfaceProjector<'a, S: ParamSurface + ?Sized> {
     label: String,
     surf: &'a S,
@@ -212,12 +216,18 @@ pub struct SurfaceProjector<'a, S: ParamSurface + ?Sized> {
     hi: [f64; 2],
     edges_u: Vec<f64>,
     edges_v: Vec<f64>,
-    cells: Vec<SurfCell>,
-    samples: Vec<(Point3, [f64; 2])>,
-    bvh: Bvh,
+    seeds: OnceLock<SurfSeeds>,
     scale: f64,
     tol: f64,
     opts: ProjectOptions,
+}
+
+/// The seeding hierarchy of a surface: cells of its parameter domain with their samples and
+/// bounding boxes in a BVH.
+struct SurfSeeds {
+    cells: Vec<SurfCell>,
+    samples: Vec<(Point3, [f64; 2])>,
+    bvh: Bvh,
 }
 
 const SAMPLES_PER_CELL: usize = 9;
@@ -295,10 +305,47 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
         check_domain(&label, du[0], du[1], "u")?;
         check_domain(&label, dv[0], dv[1], "v")?;
         let (bu, bv) = surf.breaks();
-        let edges_u = edges(du[0], du[1], &bu);
-        let edges_v = edges(dv[0], dv[1], &bv);
-        let cu = cell_edges(&edges_u, opts.cells_per_patch, opts.min_cells);
-        let cv = cell_edges(&edges_v, opts.cells_per_patch, opts.min_cells);
+        let mut pr = Self {
+            label,
+            surf,
+            lo: [du[0], dv[0]],
+            hi: [du[1], dv[1]],
+            edges_u: edges(du[0], du[1], &bu),
+            edges_v: edges(dv[0], dv[1], &bv),
+            seeds: OnceLock::new(),
+            scale: 0.0,
+            tol: 0.0,
+            opts: opts.clone(),
+        };
+        // Without a given length scale the hierarchy (whose size gives it) is built now.
+        let scale = match opts.length_scale {
+            Some(l) => l.max(f64::MIN_POSITIVE),
+            None => {
+                let (seeds, scale) = pr.build_seeds(None)?;
+                let _ = pr.seeds.set(seeds);
+                scale
+            }
+        };
+        pr.scale = scale;
+        pr.tol = opts.rel_tol * scale;
+        Ok(pr)
+    }
+
+    /// The seeding hierarchy, built at the first call.
+    fn seeds(&self) -> Result<&SurfSeeds> {
+        if let Some(s) = self.seeds.get() {
+            return Ok(s);
+        }
+        let (s, _) = self.build_seeds(Some(self.scale))?;
+        Ok(self.seeds.get_or_init(|| s))
+    }
+
+    /// Builds the seeding hierarchy; `scale`: the length scale (None: the diagonal of the
+    /// surface's samples, returned with the hierarchy).
+    fn build_seeds(&self, scale: Option<f64>) -> Result<(SurfSeeds, f64)> {
+        let (surf, opts, label) = (self.surf, &self.opts, &self.label);
+        let cu = cell_edges(&self.edges_u, opts.cells_per_patch, opts.min_cells);
+        let cv = cell_edges(&self.edges_v, opts.cells_per_patch, opts.min_cells);
         let nc = (cu.len() - 1) * (cv.len() - 1);
         let mut cells = Vec::with_capacity(nc);
         let mut samples = Vec::with_capacity(nc * SAMPLES_PER_CELL);
@@ -316,7 +363,7 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
                         let v = rect[2] + (rect[3] - rect[2]) * b2 as f64 * 0.5;
                         let d = surf.derivs(u, v);
                         if !(d.point.iter().all(|c| c.is_finite())) {
-                            return Err(non_finite(&label, &format!("(u, v) = ({u}, {v})")));
+                            return Err(non_finite(label, &format!("(u, v) = ({u}, {v})")));
                         }
                         b.add(&d.point);
                         muu = muu.max(d.duu.norm());
@@ -354,10 +401,7 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
                 });
             }
         }
-        let scale = opts
-            .length_scale
-            .unwrap_or(all.diagonal())
-            .max(f64::MIN_POSITIVE);
+        let scale = scale.unwrap_or(all.diagonal()).max(f64::MIN_POSITIVE);
         // boxes also grow by a small fraction of the scale so that flat cells have volume
         let boxes = boxes
             .into_iter()
@@ -369,20 +413,12 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
                 c.obb_hi[k] += 1e-9 * scale;
             }
         }
-        Ok(Self {
-            label,
-            surf,
-            lo: [du[0], dv[0]],
-            hi: [du[1], dv[1]],
-            edges_u,
-            edges_v,
+        let seeds = SurfSeeds {
             cells,
             samples,
             bvh: Bvh::new(boxes),
-            scale,
-            tol: opts.rel_tol * scale,
-            opts: opts.clone(),
-        })
+        };
+        Ok((seeds, scale))
     }
 
     /// The surface's label.
@@ -444,11 +480,11 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
         }
     }
 
-    fn nearest_sample(&self, cell: usize, p: &Point3) -> (f64, [f64; 2]) {
-        let c = &self.cells[cell];
+    fn nearest_sample(seeds: &SurfSeeds, cell: usize, p: &Point3) -> (f64, [f64; 2]) {
+        let c = &seeds.cells[cell];
         let s0 = c.first_sample as usize;
         let mut best = (f64::INFINITY, [c.rect[0], c.rect[2]]);
-        for (q, uv) in &self.samples[s0..s0 + SAMPLES_PER_CELL] {
+        for (q, uv) in &seeds.samples[s0..s0 + SAMPLES_PER_CELL] {
             let d = (q - p).norm_squared();
             if d < best.0 {
                 best = (d, *uv);
@@ -478,6 +514,8 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
                 index,
             });
         }
+        let seeds = self.seeds()?;
+        let nearest = |cell: usize| Self::nearest_sample(seeds, cell, p);
         let mut cands = Vec::new();
         let init = if upper.is_finite() {
             let u = upper + 2.0 * self.tol;
@@ -485,11 +523,11 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
         } else {
             f64::INFINITY
         };
-        self.bvh.candidates(
+        seeds.bvh.candidates(
             p,
             init,
-            |i, d| d.max(self.cells[i].obb_dist2(p)),
-            |i| self.nearest_sample(i, p).0,
+            |i, d| d.max(seeds.cells[i].obb_dist2(p)),
+            |i| nearest(i).0,
             &mut cands,
         );
         if cands.is_empty() && upper.is_finite() {
@@ -498,8 +536,8 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
         // the cell with the nearest sample first (the likeliest basin of the global foot),
         // then by increasing lower bound
         if let Some(k) = (0..cands.len()).min_by(|&a, &b| {
-            let da = self.nearest_sample(cands[a].1 as usize, p).0;
-            let db = self.nearest_sample(cands[b].1 as usize, p).0;
+            let da = nearest(cands[a].1 as usize).0;
+            let db = nearest(cands[b].1 as usize).0;
             da.total_cmp(&db).then(a.cmp(&b))
         }) {
             let c = cands.remove(k);
@@ -522,14 +560,14 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
                 }
             }
             // a cell within one cell of a foot already found would lead Newton back to it
-            let r = &self.cells[cell as usize].rect;
+            let r = &seeds.cells[cell as usize].rect;
             let (wu, wv) = (r[1] - r[0], r[3] - r[2]);
             if found.iter().any(|uv: &[f64; 2]| {
                 uv[0] >= r[0] - wu && uv[0] <= r[1] + wu && uv[1] >= r[2] - wv && uv[1] <= r[3] + wv
             }) {
                 continue;
             }
-            let (_, uv0) = self.nearest_sample(cell as usize, p);
+            let (_, uv0) = nearest(cell as usize);
             // neighbouring cells share their border samples: the same start, the same foot
             if started.contains(&uv0) {
                 continue;
@@ -866,12 +904,10 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceSetProjector<'a, S> {
     /// The foot on the nearest surface; `index` names the point in errors. A surface whose
     /// search fails (no Newton start converged) is an error: its true foot could be nearer.
     pub fn project_indexed(&self, p: &Point3, index: usize) -> Result<SetFoot> {
-        let mut order: Vec<(f64, usize)> = self
-            .projs
-            .iter()
-            .enumerate()
-            .map(|(i, pr)| (pr.bvh.root_box().dist2(p), i))
-            .collect();
+        let mut order = Vec::with_capacity(self.projs.len());
+        for (i, pr) in self.projs.iter().enumerate() {
+            order.push((pr.seeds()?.bvh.root_box().dist2(p), i));
+        }
         order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut best: Option<SetFoot> = None;
         for (lb, i) in order {

@@ -137,7 +137,11 @@ fn per_element(
     let mut out = Vec::with_capacity(set.len());
     for g in set.groups() {
         let n = g.kind.n_nodes();
-        let part: Vec<f64> = g.nodes.par_chunks_exact(n).map(|e| f(g.kind, e)).collect();
+        let part: Vec<f64> = g
+            .nodes
+            .par_chunks(n * 1024)
+            .flat_map_iter(|c| c.chunks_exact(n).map(|e| f(g.kind, e)))
+            .collect();
         out.extend_from_slice(&part);
     }
     out
@@ -146,9 +150,23 @@ fn per_element(
 /// Signed mean ratio of every cell, in canonical element order (NaN for kinds without a
 /// measure). Node indices must be valid ([`Mesh::validate`]).
 pub fn cell_quality(mesh: &Mesh) -> Vec<f64> {
-    let x = &mesh.coords;
+    cell_quality_at(mesh, &mesh.coords)
+}
+
+/// [`cell_quality`] of the grid's cells with the node coordinates `x` instead of the grid's
+/// own (same numbering; `x.len()` must be the node count).
+pub fn cell_quality_at(mesh: &Mesh, x: &[P]) -> Vec<f64> {
     let signed = mesh.dim == 2;
-    per_element(mesh, &mesh.cells, |kind, e| match kind {
+    per_element(mesh, &mesh.cells, |kind, e| {
+        element_quality(kind, e, x, signed)
+    })
+}
+
+/// Signed mean ratio of one element of kind `kind` with nodes `e` at coordinates `x`: a
+/// tetrahedron ([`tet_quality`]) or a triangle ([`triangle_quality`], signed in 2-D grids);
+/// NaN for other kinds.
+pub fn element_quality(kind: ElementKind, e: &[u32], x: &[P], signed: bool) -> f64 {
+    match kind {
         ElementKind::Tetra => tet_quality([
             x[e[0] as usize],
             x[e[1] as usize],
@@ -160,7 +178,7 @@ pub fn cell_quality(mesh: &Mesh) -> Vec<f64> {
             signed,
         ),
         _ => f64::NAN,
-    })
+    }
 }
 
 /// Minimum dihedral angle (tetrahedra) or corner angle (triangles) of every cell, in
