@@ -181,8 +181,17 @@ where
     let ext = opts.extension.max(0.0);
     let lo = [a0 - ext, b0 - ext];
     let hi = [a1 + ext, b1 + ext];
-    let sa = samples(a, opts.samples_per_arc);
-    let sb = samples(b, opts.samples_per_arc);
+    // The samples of both arcs (the global starts and, without a given length scale, the
+    // scale), taken only when needed: a seeded run that meets skips the global search.
+    let sampled = std::cell::OnceCell::new();
+    let sampled = || {
+        sampled.get_or_init(|| {
+            (
+                samples(a, opts.samples_per_arc),
+                samples(b, opts.samples_per_arc),
+            )
+        })
+    };
     let scale = opts.length_scale.unwrap_or_else(|| {
         let diag = |s: &[(f64, Point3)]| {
             let mut bb = crate::bvh::Aabb::EMPTY;
@@ -191,7 +200,8 @@ where
             }
             bb.diagonal()
         };
-        diag(&sa).max(diag(&sb))
+        let (sa, sb) = sampled();
+        diag(sa).max(diag(sb))
     });
     let settings = Settings {
         tol: opts.rel_tol * scale,
@@ -199,35 +209,42 @@ where
     };
     let meet = opts.meet_rel_tol * scale;
     let prob = CornerProblem { a, b };
-    let mut starts: Vec<[f64; 2]> = Vec::new();
-    if let Some(s) = seed {
-        starts.push(s);
-    }
     // global starts: the closest sample pairs, at most 4, distinct in both parameters
-    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(sa.len() * sb.len());
-    for (i, (_, p)) in sa.iter().enumerate() {
-        for (j, (_, q)) in sb.iter().enumerate() {
-            pairs.push(((p - q).norm_squared(), i, j));
+    let global_starts = || {
+        let (sa, sb) = sampled();
+        let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(sa.len() * sb.len());
+        for (i, (_, p)) in sa.iter().enumerate() {
+            for (j, (_, q)) in sb.iter().enumerate() {
+                pairs.push(((p - q).norm_squared(), i, j));
+            }
         }
-    }
-    pairs.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
-    let mut used: Vec<(usize, usize)> = Vec::new();
-    for &(_, i, j) in &pairs {
-        if used.len() >= 4 {
-            break;
+        pairs.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
+        let mut used: Vec<(usize, usize)> = Vec::new();
+        let mut starts = Vec::new();
+        for &(_, i, j) in &pairs {
+            if used.len() >= 4 {
+                break;
+            }
+            if used
+                .iter()
+                .any(|&(ui, uj)| ui.abs_diff(i) <= 1 && uj.abs_diff(j) <= 1)
+            {
+                continue;
+            }
+            used.push((i, j));
+            starts.push([sa[i].0, sb[j].0]);
         }
-        if used
-            .iter()
-            .any(|&(ui, uj)| ui.abs_diff(i) <= 1 && uj.abs_diff(j) <= 1)
-        {
-            continue;
-        }
-        used.push((i, j));
-        starts.push([sa[i].0, sb[j].0]);
+        starts
+    };
+    let mut starts: Vec<[f64; 2]> = seed.into_iter().collect();
+    if seed.is_none() {
+        starts.extend(global_starts());
     }
     let mut best: Option<CornerReport> = None;
     let mut iterations = 0;
-    for (k, s) in starts.iter().enumerate() {
+    let mut k = 0;
+    while k < starts.len() {
+        let s = &starts[k];
         let o = newton::minimise(&prob, *s, &lo, &hi, settings);
         iterations += o.iters;
         let pa = a.point(o.x[0]);
@@ -248,10 +265,14 @@ where
         if best.is_none_or(|b| dist < b.distance) {
             best = Some(rep);
         }
-        // a seeded run that meets is accepted without the global search
-        if k == 0 && seed.is_some() && dist <= meet {
-            break;
+        if k == 0 && seed.is_some() {
+            // a seeded run that meets is accepted without the global search
+            if dist <= meet {
+                break;
+            }
+            starts.extend(global_starts());
         }
+        k += 1;
     }
     let mut best = best.ok_or_else(|| Error::BadEntity {
         entity: corner.to_string(),
