@@ -10,12 +10,15 @@
 //! for planes.
 //!
 //! R (Eqs. 25–26): per moving skin element (see [`crate::rotation`]), averaged to skin nodes
-//! as unit quaternions (area-weighted sum, normalised), propagated by Eq. 26 solved for the
-//! four quaternion components with the skin values and R = I on fixed nodes held, starting from
-//! R = I; each node's result is normalised (the projection of the average to the nearest
-//! rotation), and R_ij is the normalised sum of the two end nodes' quaternions — the geodesic
-//! midpoint of R_i and R_j, a proper rotation, at the cost of a few flops per edge instead of
-//! an SVD per edge.
+//! as unit quaternions (area-weighted sum, normalised, scalar part w ≥ 0), propagated by
+//! Eq. 26 solved for the quaternions' vector part u (one three-component solve) with the skin
+//! values and R = I (u = 0) on fixed nodes held, starting from R = I; each node's rotation is
+//! the unit quaternion with that vector part, w = √(1 − |u|²) (|u| ≤ 1 by the discrete maximum
+//! principle, A being an M-matrix; clamped against round-off). This replaces a second solve for
+//! w followed by normalisation: both are exact for a uniform rotation and differ by O(θ³) for
+//! angles θ in between. R_ij is the normalised sum of the two end nodes' quaternions — the
+//! geodesic midpoint of R_i and R_j, a proper rotation, at the cost of a few flops per edge
+//! instead of an SVD per edge.
 
 use std::time::Instant;
 
@@ -33,6 +36,27 @@ use crate::solve::{
     pcg, point_iteration, reverse_cuthill_mckee,
 };
 use crate::support::{SupKind, Support, Supports, place, point, tangent_constraint};
+
+/// With `DEFORM_TRACE` set: prints the seconds since `t` and the resident / peak memory
+/// (Linux /proc) for the set-up step `label` on stderr; restarts `t`.
+fn tr(label: &str, t: &mut Instant) {
+    if std::env::var_os("DEFORM_TRACE").is_some() {
+        let st = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+        let g = |k: &str| {
+            st.lines()
+                .find(|l| l.starts_with(k))
+                .unwrap_or("")
+                .to_string()
+        };
+        eprintln!(
+            "TRACE {label}: {:.3} s  {} {}",
+            t.elapsed().as_secs_f64(),
+            g("VmRSS"),
+            g("VmHWM")
+        );
+    }
+    *t = Instant::now();
+}
 
 /// Spring stiffness K_ij of the edge ij (lengths and volumes of the grid at the start of the
 /// increment).
@@ -236,10 +260,10 @@ struct SolverState {
     shape: (usize, usize),
     /// Δx of Eq. 21 per unknown (empty when nothing was solved).
     dx: Vec<V3>,
-    /// The Eq. 26 solutions per unknown before normalisation: quaternion vector part and
-    /// scalar part (empty without R).
+    /// The Eq. 26 solution per unknown: the quaternion's vector part as solved (before the
+    /// clamp to |u| ≤ 1; empty without R).
     qv: Vec<V3>,
-    /// See `qv`.
+    /// The scalar part derived from it, √(1 − |u|²) (not an unknown of the solve).
     qw: Vec<f64>,
     /// Parameters of the nodes sliding on supports (classification order).
     params: Vec<[f64; 2]>,
@@ -337,7 +361,7 @@ struct Springs<'a> {
     kind: Stiffness,
     /// For [`Stiffness::Volume`]: V̄ / V_node per node; for [`Stiffness::WallDistance`]:
     /// the distance d_node to the moving boundary.
-    vol_factor: Vec<f64>,
+    vol_factor: std::borrow::Cow<'a, [f64]>,
     /// ℓ of [`Stiffness::WallDistance`].
     wall_len: f64,
 }
@@ -471,47 +495,81 @@ fn springs<'a>(
     Springs {
         x,
         kind,
-        vol_factor,
+        vol_factor: vol_factor.into(),
         wall_len,
     }
 }
 
 /// A = spring matrix on the unknowns (rows in solver order, parallel, deterministic).
+///
+/// Two passes over the rows, both in parallel: the row lengths (unknown neighbours), then,
+/// per chunk of [`CHUNK`] rows, each row's entries written straight into its slice of the
+/// output and sorted by column there (one scratch buffer per chunk, no allocation per row).
+/// a_ii sums K_ij over the neighbours in adjacency order, whatever the thread count.
 fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> SymMatrix {
     let nu = sys.node_of.len();
-    let rows: Vec<(f64, Vec<(u32, f64)>)> = (0..nu)
-        .into_par_iter()
+    let is_unk = |j: u32| sys.unk_of[j as usize] != u32::MAX;
+    let lens: Vec<usize> = sys
+        .node_of
+        .par_iter()
         .with_min_len(CHUNK)
-        .map(|k| {
+        .map(|&i| {
+            adj.neighbours(i as usize)
+                .iter()
+                .filter(|&&j| is_unk(j))
+                .count()
+        })
+        .collect();
+    let mut offsets = Vec::with_capacity(nu + 1);
+    offsets.push(0usize);
+    let mut total = 0;
+    for l in lens {
+        total += l;
+        offsets.push(total);
+    }
+    let mut diag = vec![0.0; nu];
+    let mut cols = vec![0u32; total];
+    let mut vals = vec![0.0; total];
+    // One (rows, diagonal, columns, values) piece per chunk of rows.
+    let mut pieces = Vec::with_capacity(nu.div_ceil(CHUNK));
+    {
+        let (mut dr, mut cr, mut vr) = (&mut diag[..], &mut cols[..], &mut vals[..]);
+        for lo in (0..nu).step_by(CHUNK) {
+            let hi = (lo + CHUNK).min(nu);
+            let len = offsets[hi] - offsets[lo];
+            let (d, dt) = dr.split_at_mut(hi - lo);
+            let (c, ct) = cr.split_at_mut(len);
+            let (v, vt) = vr.split_at_mut(len);
+            pieces.push((lo, d, c, v));
+            (dr, cr, vr) = (dt, ct, vt);
+        }
+    }
+    pieces.into_par_iter().for_each(|(lo, d, c, v)| {
+        let base = offsets[lo];
+        let mut row: Vec<(u32, f64)> = Vec::new();
+        for (r, dk) in d.iter_mut().enumerate() {
+            let k = lo + r;
             let i = sys.node_of[k] as usize;
-            let mut d = 0.0;
-            let mut row = Vec::with_capacity(adj.neighbours(i).len());
+            let mut s = 0.0;
+            row.clear();
             for &j in adj.neighbours(i) {
                 let kij = sp.k(i, j as usize);
-                d += kij;
+                s += kij;
                 let u = sys.unk_of[j as usize];
                 if u != u32::MAX {
                     row.push((u, -kij));
                 }
             }
-            row.sort_by_key(|e| e.0);
-            (d, row)
-        })
-        .collect();
-    let mut diag = Vec::with_capacity(nu);
-    let mut offsets = Vec::with_capacity(nu + 1);
-    offsets.push(0);
-    let nnz: usize = rows.iter().map(|r| r.1.len()).sum();
-    let mut cols = Vec::with_capacity(nnz);
-    let mut vals = Vec::with_capacity(nnz);
-    for (d, row) in rows {
-        diag.push(d);
-        for (c, v) in row {
-            cols.push(c);
-            vals.push(v);
+            // Columns are distinct: the order is unique.
+            row.sort_unstable_by_key(|e| e.0);
+            *dk = s;
+            let at = offsets[k] - base;
+            for (q, &(cu, val)) in row.iter().enumerate() {
+                c[at + q] = cu;
+                v[at + q] = val;
+            }
         }
-        offsets.push(cols.len());
-    }
+    });
     SymMatrix {
         diag,
         offsets,
@@ -520,9 +578,10 @@ fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> SymMatrix {
     }
 }
 
-/// b_k = Σ_{j prescribed} K_ij v_j (+ `extra(i)`), for a per-node field v.
-fn rhs<F>(sys: &System, adj: &Adjacency, sp: &Springs, v: &[V3], extra: F) -> Vec<V3>
+/// b_k = Σ_{j prescribed} K_ij v(j) (+ `extra(i)`), for a per-node field v.
+fn rhs<G, F>(sys: &System, adj: &Adjacency, sp: &Springs, v: G, extra: F) -> Vec<V3>
 where
+    G: Fn(usize) -> V3 + Sync,
     F: Fn(usize) -> V3 + Sync,
 {
     (0..sys.node_of.len())
@@ -534,7 +593,7 @@ where
             for &j in adj.neighbours(i) {
                 if sys.unk_of[j as usize] == u32::MAX {
                     let kij = sp.k(i, j as usize);
-                    let vj = v[j as usize];
+                    let vj = v(j as usize);
                     for q in 0..3 {
                         s[q] += kij * vj[q];
                     }
@@ -637,8 +696,11 @@ impl Base {
         } else {
             Vec::new()
         };
+        let mut tt = Instant::now();
         let sp = springs(mesh, x, opts.stiffness, adj, &moving);
+        tr("springs", &mut tt);
         let a = assemble(sys, adj, &sp);
+        tr("assemble", &mut tt);
         times.assemble += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let (a, pre) = match opts.solver {
@@ -652,10 +714,11 @@ impl Base {
             SolverKind::PointIteration => (Some(a), Pre::None),
         };
         times.precond += t.elapsed().as_secs_f64();
+        tr("precond", &mut tt);
         Ok(Self {
             a,
             pre,
-            vol_factor: sp.vol_factor,
+            vol_factor: sp.vol_factor.into_owned(),
             wall_len: sp.wall_len,
         })
     }
@@ -724,7 +787,6 @@ fn step(
     let x0 = &mesh.coords;
     let n = cur.len();
     // Prescribed targets and displacements of this increment.
-    let mut disp: Vec<V3> = vec![[0.0; 3]; n];
     let mut target: Vec<[f64; 3]> = cur.to_vec();
     let mut max_disp = 0.0f64;
     for i in 0..n {
@@ -745,9 +807,9 @@ fn step(
             _ => continue,
         };
         target[i] = t;
-        disp[i] = [t[0] - cur[i][0], t[1] - cur[i][1], t[2] - cur[i][2]];
-        max_disp =
-            max_disp.max((disp[i][0].powi(2) + disp[i][1].powi(2) + disp[i][2].powi(2)).sqrt());
+        // The displacement target − cur (recomputed, not stored, by the right-hand side).
+        let d = [t[0] - cur[i][0], t[1] - cur[i][1], t[2] - cur[i][2]];
+        max_disp = max_disp.max((d[0].powi(2) + d[1].powi(2) + d[2].powi(2)).sqrt());
     }
     let mut out = StepOut {
         dx: Vec::new(),
@@ -780,7 +842,7 @@ fn step(
     let sp = Springs {
         x: cur,
         kind: opts.stiffness,
-        vol_factor: base.vol_factor.clone(),
+        vol_factor: base.vol_factor.as_slice().into(),
         wall_len: base.wall_len,
     };
     let a = base.matrix();
@@ -830,31 +892,37 @@ fn step(
             }
         }
         if any_rot {
-            // Eq. 26 for the quaternion components, R = I as the start.
-            let bv = rhs(sys, adj, &sp, &qv, |_| [0.0; 3]);
-            let bw = rhs(sys, adj, &sp, &qw, |_| [0.0; 3]);
+            // Eq. 26 for the quaternions' vector part u (one three-component solve); the
+            // scalar part follows from it, w = √(1 − |u|²) ≥ 0 (the discrete maximum
+            // principle keeps |u| ≤ 1 up to the solver tolerance: clamped), so no second
+            // solve is needed (see the module doc).
+            drop((acc, touched));
+            let bv = rhs(sys, adj, &sp, |j| qv[j], |_| [0.0; 3]);
             let nu = sys.node_of.len();
-            // R = I as the start, or the previous solution when warm.
-            let (mut xv, mut xw) = match warm {
-                Some(w) if w.qv.len() == nu => {
-                    (w.qv.clone(), w.qw.iter().map(|&q| [q, 0.0, 0.0]).collect())
-                }
-                _ => (vec![[0.0; 3]; nu], vec![[1.0, 0.0, 0.0]; nu]),
+            // u = 0 (R = I) as the start, or the previous solution when warm.
+            let mut xv = match warm {
+                Some(w) if w.qv.len() == nu => w.qv.clone(),
+                _ => vec![[0.0; 3]; nu],
             };
-            let none = Constraints::default();
-            let rv = solve_one(a, &bv, &mut xv, &none, pre, opts, 1.0);
-            let rw = solve_one(a, &bw, &mut xw, &none, pre, opts, 1.0);
-            out.rot_iterations = rv.iterations + rw.iterations;
-            out.qw = xw.iter().map(|q| q[0]).collect();
+            let rv = solve_one(a, &bv, &mut xv, &Constraints::default(), pre, opts, 1.0);
+            drop(bv);
+            out.rot_iterations = rv.iterations;
+            let mut scalar = Vec::with_capacity(nu);
             for (k, &i) in sys.node_of.iter().enumerate() {
-                let (v, w) = (xv[k], xw[k][0]);
-                let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + w * w).sqrt();
-                if l > 0.0 {
-                    qv[i as usize] = [v[0] / l, v[1] / l, v[2] / l];
-                    qw[i as usize] = [w / l, 0.0, 0.0];
-                }
+                let v = xv[k];
+                let s2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+                let (u, w) = if s2 <= 1.0 {
+                    (v, (1.0 - s2).sqrt())
+                } else {
+                    let l = s2.sqrt();
+                    ([v[0] / l, v[1] / l, v[2] / l], 0.0)
+                };
+                qv[i as usize] = u;
+                qw[i as usize] = [w, 0.0, 0.0];
+                scalar.push(w);
             }
             out.qv = xv;
+            out.qw = scalar;
         }
     }
     times.rotation += t.elapsed().as_secs_f64();
@@ -862,7 +930,11 @@ fn step(
     // Eq. 21 right-hand side.
     let t = Instant::now();
     let cur_ro: &[[f64; 3]] = cur;
-    let b = rhs(sys, adj, &sp, &disp, |i| {
+    let disp = |j: usize| {
+        let (t, c) = (target[j], cur_ro[j]);
+        [t[0] - c[0], t[1] - c[1], t[2] - c[2]]
+    };
+    let b = rhs(sys, adj, &sp, disp, |i| {
         if !any_rot {
             return [0.0; 3];
         }
@@ -1244,14 +1316,19 @@ impl<'s> Deformer<'s> {
         let t = Instant::now();
         progress("setup", 0, 1);
         let renumber = opts.renumber && mesh.n_nodes() >= 2;
+        let mut tt = Instant::now();
         let (m2, bc2, sup2, perm, inv) = if renumber {
             // Validate in the user's numbering first, so that errors name the user's nodes.
             classify(mesh, bc, opts.plane_rel_tol, sup)?;
+            tr("classify1", &mut tt);
             let perm = spatial_order(&mesh.coords);
+            tr("morton", &mut tt);
             let mut m2 = mesh.clone();
+            tr("clone", &mut tt);
             m2.renumber_nodes(&perm).map_err(|e| Error::BadGraph {
                 reason: e.to_string(),
             })?;
+            tr("renumber", &mut tt);
             let bc2 = BoundaryConditions {
                 markers: bc.markers.clone(),
                 displacements: bc
@@ -1277,13 +1354,20 @@ impl<'s> Deformer<'s> {
         } else {
             (mesh.clone(), bc.clone(), sup.cloned(), None, Vec::new())
         };
+        tt = Instant::now();
         let cls = classify(&m2, &bc2, opts.plane_rel_tol, sup2.as_ref())?;
+        tr("classify2", &mut tt);
         let adj = Adjacency::build(&m2);
+        tr("adjacency", &mut tt);
         let sys = build_system(&cls, &adj, opts.renumber);
+        tr("build_system", &mut tt);
         times.setup = t.elapsed().as_secs_f64();
         let t = Instant::now();
+        tt = Instant::now();
         let q0 = cell_quality(&m2, &m2.coords);
+        tr("quality", &mut tt);
         let before = QualitySummary::of(&q0);
+        tr("summary", &mut tt);
         times.quality += t.elapsed().as_secs_f64();
         let base = if sys.node_of.is_empty() {
             None

@@ -2,9 +2,10 @@
 //!
 //! Built once, in parallel, without per-node heap allocation: a node-to-element table is
 //! made by counting, prefix sum and a sequential fill (so each row lists its elements in
-//! increasing order); then every node gathers the edge neighbours from its elements into a
-//! per-thread scratch buffer, sorts and deduplicates them — first to count, then to fill its
-//! own slice of the output. The result is independent of the number of threads.
+//! increasing order); then every node gathers the edge neighbours from its elements (through
+//! a per-kind table of local neighbours) into a per-task scratch buffer, sorts and
+//! deduplicates them, and appends them to its block of nodes; the blocks are concatenated in
+//! order. The result is independent of the number of threads.
 
 use rayon::prelude::*;
 
@@ -37,11 +38,10 @@ fn local_neighbours(kind: ElementKind, local: usize, out: &mut [u8; 4]) -> usize
 }
 
 /// Node-to-element incidence: for node `i`, the (group index, element index, local node)
-/// triples packed as global element slots.
+/// triples packed in `slots[offsets[i]..offsets[i + 1]]`.
 struct Incidence {
     offsets: Vec<usize>,
-    /// For each incidence, the flat position of the node in its group's connectivity,
-    /// tagged with the group index in the top 3 bits.
+    /// Group index in the top 3 bits, local node in the low 3 bits, element index between.
     slots: Vec<u64>,
 }
 
@@ -59,28 +59,48 @@ fn incidence(n_nodes: usize, cells: &Elements) -> Incidence {
     let mut cursor = offsets.clone();
     let mut slots = vec![0u64; offsets[n_nodes]];
     for (gi, g) in cells.groups().iter().enumerate() {
-        for (pos, &v) in g.nodes.iter().enumerate() {
-            let c = &mut cursor[v as usize];
-            slots[*c] = ((gi as u64) << 61) | pos as u64;
-            *c += 1;
+        let nn = g.kind.n_nodes();
+        for (elem, conn) in g.nodes.chunks_exact(nn).enumerate() {
+            for (local, &v) in conn.iter().enumerate() {
+                let c = &mut cursor[v as usize];
+                slots[*c] = ((gi as u64) << 61) | ((elem as u64) << 3) | local as u64;
+                *c += 1;
+            }
         }
     }
     Incidence { offsets, slots }
 }
 
-/// Pushes the edge neighbours of `node` into `scratch` (unsorted, with repeats).
-fn gather(node: usize, inc: &Incidence, cells: &Elements, scratch: &mut Vec<u32>) {
+/// Local neighbours of every local node of a kind (at most 4 each) and their counts.
+type NeighbourTable = ([[u8; 4]; 8], [u8; 8]);
+
+fn neighbour_table(kind: ElementKind) -> NeighbourTable {
+    let mut t = ([[0u8; 4]; 8], [0u8; 8]);
+    for local in 0..kind.n_nodes() {
+        t.1[local] = local_neighbours(kind, local, &mut t.0[local]) as u8;
+    }
+    t
+}
+
+/// Pushes the edge neighbours of `node` into `scratch`, sorted and without repeats.
+fn gather(
+    node: usize,
+    inc: &Incidence,
+    cells: &Elements,
+    tables: &[NeighbourTable],
+    scratch: &mut Vec<u32>,
+) {
     scratch.clear();
     let groups = cells.groups();
     for &slot in &inc.slots[inc.offsets[node]..inc.offsets[node + 1]] {
-        let g = &groups[(slot >> 61) as usize];
-        let pos = (slot & ((1 << 61) - 1)) as usize;
+        let gi = (slot >> 61) as usize;
+        let g = &groups[gi];
+        let elem = ((slot & ((1 << 61) - 1)) >> 3) as usize;
+        let local = (slot & 7) as usize;
         let nn = g.kind.n_nodes();
-        let (elem, local) = (pos / nn, pos % nn);
         let conn = &g.nodes[elem * nn..elem * nn + nn];
-        let mut loc = [0u8; 4];
-        let k = local_neighbours(g.kind, local, &mut loc);
-        for &l in &loc[..k] {
+        let (loc, cnt) = &tables[gi];
+        for &l in &loc[local][..usize::from(cnt[local])] {
             let v = conn[usize::from(l)];
             if v as usize != node {
                 scratch.push(v);
@@ -90,6 +110,9 @@ fn gather(node: usize, inc: &Incidence, cells: &Elements, scratch: &mut Vec<u32>
     scratch.sort_unstable();
     scratch.dedup();
 }
+
+/// Nodes per task of the parallel gather.
+const BLOCK: usize = 4096;
 
 impl Adjacency {
     /// Builds the adjacency of the grid's cells (edges of volume elements in 3D, of
@@ -109,37 +132,40 @@ impl Adjacency {
     /// Builds the adjacency of any element set over `n_nodes` nodes.
     pub fn from_elements(n_nodes: usize, cells: &Elements) -> Self {
         let inc = incidence(n_nodes, cells);
-        let degrees: Vec<usize> = (0..n_nodes)
+        let tables: Vec<NeighbourTable> = cells
+            .groups()
+            .iter()
+            .map(|g| neighbour_table(g.kind))
+            .collect();
+        // One (degrees, neighbours) block per BLOCK nodes, gathered once.
+        let blocks: Vec<(Vec<u32>, Vec<u32>)> = (0..n_nodes.div_ceil(BLOCK))
             .into_par_iter()
-            .map_init(Vec::new, |scratch, i| {
-                gather(i, &inc, cells, scratch);
-                scratch.len()
+            .map_init(Vec::new, |scratch, b| {
+                let lo = b * BLOCK;
+                let hi = (lo + BLOCK).min(n_nodes);
+                let mut degrees = Vec::with_capacity(hi - lo);
+                let mut out = Vec::new();
+                for i in lo..hi {
+                    gather(i, &inc, cells, &tables, scratch);
+                    degrees.push(scratch.len() as u32);
+                    out.extend_from_slice(scratch);
+                }
+                (degrees, out)
             })
             .collect();
+        drop(inc);
+        let total: usize = blocks.iter().map(|b| b.1.len()).sum();
         let mut offsets = Vec::with_capacity(n_nodes + 1);
         offsets.push(0usize);
+        let mut indices = Vec::with_capacity(total);
         let mut acc = 0;
-        for d in &degrees {
-            acc += d;
-            offsets.push(acc);
+        for (degrees, out) in blocks {
+            for d in degrees {
+                acc += d as usize;
+                offsets.push(acc);
+            }
+            indices.extend_from_slice(&out);
         }
-        drop(degrees);
-        let mut indices = vec![0u32; acc];
-        // Split the output into one slice per node, then fill in parallel.
-        let mut rows: Vec<&mut [u32]> = Vec::with_capacity(n_nodes);
-        let mut rest: &mut [u32] = &mut indices;
-        for i in 0..n_nodes {
-            let (row, tail) = rest.split_at_mut(offsets[i + 1] - offsets[i]);
-            rows.push(row);
-            rest = tail;
-        }
-        rows.par_iter_mut()
-            .enumerate()
-            .for_each_init(Vec::new, |scratch, (i, row)| {
-                gather(i, &inc, cells, scratch);
-                row.copy_from_slice(scratch);
-            });
-        drop(rows);
         Adjacency { offsets, indices }
     }
 
@@ -185,6 +211,53 @@ mod tests {
         assert_eq!(local_neighbours(ElementKind::Hexa, 6, &mut b), 3);
         assert_eq!(local_neighbours(ElementKind::Prism, 5, &mut b), 3);
         assert_eq!(local_neighbours(ElementKind::Quad, 0, &mut b), 2);
+    }
+
+    /// The adjacency from the element edges through a set (independent of the incidence
+    /// table and the blocks).
+    fn naive(n: usize, cells: &Elements) -> Vec<Vec<u32>> {
+        let mut rows = vec![std::collections::BTreeSet::new(); n];
+        for g in cells.groups() {
+            let nn = g.kind.n_nodes();
+            for conn in g.nodes.chunks_exact(nn) {
+                for e in g.kind.edges() {
+                    let (a, b) = (conn[usize::from(e[0])], conn[usize::from(e[1])]);
+                    if a != b {
+                        rows[a as usize].insert(b);
+                        rows[b as usize].insert(a);
+                    }
+                }
+            }
+        }
+        rows.into_iter().map(|r| r.into_iter().collect()).collect()
+    }
+
+    #[test]
+    fn matches_the_element_edges_on_mixed_grids_across_blocks() {
+        // A tetrahedral box with more nodes than one block, plus hexahedra, prisms and
+        // pyramids over some of its nodes (connectivity only matters here).
+        let m = crate::generate::box_tets(20, 15, 16, [0.0; 3], [1.0; 3]);
+        let n = m.n_nodes();
+        assert!(n > BLOCK);
+        let mut cells = m.cells.clone();
+        let nid = |k: usize| ((k * 7919) % n) as u32;
+        for k in 0..200 {
+            let h: Vec<u32> = (0..8).map(|q| nid(8 * k + q)).collect();
+            cells.push(ElementKind::Hexa, &h, None);
+            cells.push(ElementKind::Prism, &h[..6], None);
+            cells.push(ElementKind::Pyramid, &h[..5], None);
+        }
+        let a = Adjacency::from_elements(n, &cells);
+        let want = naive(n, &cells);
+        for (i, w) in want.iter().enumerate() {
+            assert_eq!(a.neighbours(i), &w[..], "node {i}");
+        }
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| Adjacency::from_elements(n, &cells));
+        assert_eq!(one, a);
     }
 
     #[test]

@@ -415,3 +415,34 @@ pub fn compare(a: &Mesh, b: &Mesh, n_worst: usize) -> Result<Comparison> {
         worst,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn summary_equals_the_sorted_order_statistics() {
+        // Repeated values, both zeros, negatives and NaN, several sizes around the 1 % rank.
+        for n in [1usize, 2, 99, 100, 101, 1000, 4321] {
+            let q: Vec<f64> = (0..n)
+                .map(|i| match i % 11 {
+                    3 => f64::NAN,
+                    5 => -0.0,
+                    7 => 0.0,
+                    _ => ((i * 7919) % 257) as f64 / 128.0 - 0.5,
+                })
+                .collect();
+            let s = summary(&q);
+            let mut v: Vec<f64> = q.iter().copied().filter(|x| !x.is_nan()).collect();
+            if v.is_empty() {
+                assert_eq!(s.measured, 0);
+                continue;
+            }
+            v.sort_unstable_by(f64::total_cmp);
+            let rank = ((0.01 * v.len() as f64).ceil() as usize).max(1) - 1;
+            assert_eq!(s.min.to_bits(), v[0].to_bits(), "n = {n}");
+            assert_eq!(s.max.to_bits(), v[v.len() - 1].to_bits(), "n = {n}");
+            assert_eq!(s.p1.to_bits(), v[rank].to_bits(), "n = {n}");
+        }
+    }
+}

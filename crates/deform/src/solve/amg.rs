@@ -69,8 +69,12 @@ pub struct Amg<'a> {
     scratch: Mutex<Vec<Scratch>>,
 }
 
+/// Vectors of one level of the V-cycle: `b` and `out` are the level's right-hand side and
+/// result (empty on the finest level, where the caller's vectors are used), `x` the iterate
+/// and `r` the residual (empty on the coarsest level).
 struct Scratch {
     b: Vec<V3>,
+    out: Vec<V3>,
     x: Vec<V3>,
     r: Vec<V3>,
 }
@@ -132,9 +136,11 @@ impl<'a> Amg<'a> {
             let ac = galerkin(cur, &p, &r);
             if trace {
                 eprintln!(
-                    "amg level {}: n {} -> {nagg}, aggregate {t_agg:.3} s, P {:.3} s, Pt {:.3} s, RAP {:.3} s",
+                    "amg level {}: n {} -> {nagg}, nnz(P) {}, nnz(A_c) {}, aggregate {t_agg:.3} s, P {:.3} s, Pt {:.3} s, RAP {:.3} s",
                     levels.len(),
                     cur.n(),
+                    p.cols.len(),
+                    ac.cols.len(),
                     t_p - t_agg,
                     t_r - t_p,
                     t0.elapsed().as_secs_f64() - t_r
@@ -149,8 +155,10 @@ impl<'a> Amg<'a> {
         let mut scratch = Vec::new();
         for l in 0..levels.len() {
             let n = if l == 0 { a.n() } else { coarse[l - 1].n() };
+            let io = if l == 0 { 0 } else { n };
             scratch.push(Scratch {
-                b: vec![[0.0; 3]; n],
+                b: vec![[0.0; 3]; io],
+                out: vec![[0.0; 3]; io],
                 x: vec![[0.0; 3]; n],
                 r: vec![[0.0; 3]; n],
             });
@@ -158,7 +166,8 @@ impl<'a> Amg<'a> {
         let nc = last.n();
         scratch.push(Scratch {
             b: vec![[0.0; 3]; nc],
-            x: vec![[0.0; 3]; nc],
+            out: vec![[0.0; 3]; nc],
+            x: Vec::new(),
             r: Vec::new(),
         });
         Ok(Self {
@@ -195,54 +204,73 @@ impl<'a> Amg<'a> {
         }
     }
 
-    fn vcycle(&self, l: usize, s: &mut [Scratch]) {
+    /// out ← V-cycle applied to `b` on level `l`; `x`, `r` are the level's work vectors and
+    /// `deeper` the scratch of the coarser levels.
+    fn vcycle(
+        &self,
+        l: usize,
+        b: &[V3],
+        out: &mut [V3],
+        x: &mut [V3],
+        r: &mut [V3],
+        deeper: &mut [Scratch],
+    ) {
         if l == self.levels.len() {
-            let sc = &mut s[l];
-            self.chol.solve(&sc.b, &mut sc.x);
+            self.chol.solve(b, out);
             return;
         }
         let a = self.matrix(l);
         let lev = &self.levels[l];
-        {
-            let (head, tail) = s.split_at_mut(l + 1);
-            let sc = &mut head[l];
-            // Pre-smoothing from x = 0: x = W b, then x += W (b − A x).
-            let w = &lev.wdiag;
-            sc.x.par_chunks_mut(CHUNK)
-                .zip(sc.b.par_chunks(CHUNK))
-                .enumerate()
-                .for_each(|(c, (xs, bs))| {
-                    let r0 = c * CHUNK;
-                    for (k, (xi, bi)) in xs.iter_mut().zip(bs).enumerate() {
-                        let wk = w[r0 + k];
-                        *xi = [wk * bi[0], wk * bi[1], wk * bi[2]];
-                    }
-                });
-            for _ in 1..self.sweeps {
-                jacobi_sweep(a, w, &sc.b, &mut sc.x, &mut sc.r);
-            }
-            // Restrict the residual.
-            a.residual(&sc.b, &sc.x, &mut sc.r);
-            spmv_csr(&lev.r, &sc.r, &mut tail[0].b);
+        let w = &lev.wdiag;
+        // Pre-smoothing from x = 0: x = W b, then x += W (b − A x).
+        x.par_chunks_mut(CHUNK)
+            .zip(b.par_chunks(CHUNK))
+            .enumerate()
+            .for_each(|(c, (xs, bs))| {
+                let r0 = c * CHUNK;
+                for (k, (xi, bi)) in xs.iter_mut().zip(bs).enumerate() {
+                    let wk = w[r0 + k];
+                    *xi = [wk * bi[0], wk * bi[1], wk * bi[2]];
+                }
+            });
+        for _ in 1..self.sweeps {
+            jacobi_sweep(a, w, b, x, r);
         }
-        self.vcycle(l + 1, s);
-        let (head, tail) = s.split_at_mut(l + 1);
-        let sc = &mut head[l];
-        // Prolongate and correct; post-smoothing.
-        spmv_csr_add(&lev.p, &tail[0].x, &mut sc.x);
-        for _ in 0..self.sweeps {
-            jacobi_sweep(a, &lev.wdiag, &sc.b, &mut sc.x, &mut sc.r);
+        // Restrict the residual, solve the coarse problem.
+        a.residual(b, x, r);
+        let (next, rest) = deeper
+            .split_first_mut()
+            .expect("one scratch per level below the finest");
+        spmv_csr(&lev.r, r, &mut next.b);
+        self.vcycle(
+            l + 1,
+            &next.b,
+            &mut next.out,
+            &mut next.x,
+            &mut next.r,
+            rest,
+        );
+        // Prolongate and correct; post-smoothing, the last sweep written straight to `out`.
+        spmv_csr_add(&lev.p, &next.out, x);
+        for _ in 1..self.sweeps {
+            jacobi_sweep(a, w, b, x, r);
         }
+        jacobi_sweep_into(a, w, b, x, out);
     }
 }
 
 impl Preconditioner for Amg<'_> {
     fn apply(&self, r: &[V3], z: &mut [V3]) {
         let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        let s = &mut guard[..];
-        s[0].b.copy_from_slice(r);
-        self.vcycle(0, s);
-        z.copy_from_slice(&s[0].x);
+        let (top, deeper) = guard
+            .split_first_mut()
+            .expect("the hierarchy has a scratch per level");
+        if self.levels.is_empty() {
+            // A single level: the dense factorisation is the preconditioner.
+            self.chol.solve(r, z);
+            return;
+        }
+        self.vcycle(0, r, z, &mut top.x, &mut top.r, deeper);
     }
     fn name(&self) -> &'static str {
         "amg"
@@ -274,6 +302,22 @@ fn jacobi_sweep(a: &SymMatrix, w: &[f64], b: &[V3], x: &mut [V3], r: &mut [V3]) 
                 }
             }
         });
+}
+
+/// out ← x + W (b − A x) (one Jacobi sweep written to another vector; the same arithmetic
+/// as [`jacobi_sweep`], row by row).
+fn jacobi_sweep_into(a: &SymMatrix, w: &[f64], b: &[V3], x: &[V3], out: &mut [V3]) {
+    out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, os)| {
+        let r0 = c * CHUNK;
+        for (k, oi) in os.iter_mut().enumerate() {
+            let i = r0 + k;
+            let v = a.row_mul(i, x);
+            let ri = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
+            let wk = w[i];
+            let xi = x[i];
+            *oi = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
+        }
+    });
 }
 
 /// y ← M x for a general CSR matrix.
@@ -446,30 +490,8 @@ impl Acc {
     }
 }
 
-/// Row-parallel sparse product with a dense accumulator per task; `row(i, acc)` adds the
-/// contributions of row i in a fixed order.
-fn product_rows<F>(nrows: usize, ncols: usize, row: F) -> Csr
-where
-    F: Fn(usize, &mut Acc) + Sync,
-{
-    let blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..nrows.div_ceil(CHUNK))
-        .into_par_iter()
-        .map_init(
-            || Acc::new(ncols),
-            |acc, b| {
-                let lo = b * CHUNK;
-                let hi = (lo + CHUNK).min(nrows);
-                let mut lens = Vec::with_capacity(hi - lo);
-                let mut cols = Vec::new();
-                let mut vals = Vec::new();
-                for i in lo..hi {
-                    row(i, acc);
-                    lens.push(acc.drain(&mut cols, &mut vals));
-                }
-                (lens, cols, vals)
-            },
-        )
-        .collect();
+/// Concatenates per-block rows (row lengths, columns, values) into one CSR matrix.
+fn concat_blocks(nrows: usize, ncols: usize, blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)>) -> Csr {
     let total: usize = blocks.iter().map(|b| b.1.len()).sum();
     let mut offsets = Vec::with_capacity(nrows + 1);
     offsets.push(0usize);
@@ -492,10 +514,21 @@ where
     }
 }
 
+/// Coarse rows per task of the Galerkin product.
+const GALERKIN_ROWS: usize = 4096;
+
 /// A_c = R A P with R = Pᵀ, returned with its diagonal apart.
+///
+/// Row-parallel over blocks of [`GALERKIN_ROWS`] coarse rows; each block first computes the
+/// rows of A P it needs (the fine rows in its rows of R), then its rows of R (A P), both with
+/// a dense accumulator. A P is never held whole (it has ~2× the entries of A: the largest
+/// temporary of the set-up otherwise); the fine rows shared by neighbouring blocks are
+/// computed once per block. Every row is computed by one task in a fixed order, so the
+/// result does not depend on the thread count (nor on the block size).
 fn galerkin(a: &SymMatrix, p: &Csr, r: &Csr) -> SymMatrix {
     let nc = p.ncols;
-    let ap = product_rows(a.n(), nc, |i, acc| {
+    let n = a.n();
+    let ap_row = |i: usize, acc: &mut Acc| {
         let d = a.diag[i];
         for q in p.offsets[i]..p.offsets[i + 1] {
             acc.add(p.cols[q], d * p.vals[q]);
@@ -507,16 +540,49 @@ fn galerkin(a: &SymMatrix, p: &Csr, r: &Csr) -> SymMatrix {
                 acc.add(p.cols[q], v * p.vals[q]);
             }
         }
-    });
-    let rap = product_rows(nc, nc, |i, acc| {
-        for k in r.offsets[i]..r.offsets[i + 1] {
-            let j = r.cols[k] as usize;
-            let v = r.vals[k];
-            for q in ap.offsets[j]..ap.offsets[j + 1] {
-                acc.add(ap.cols[q], v * ap.vals[q]);
-            }
-        }
-    });
+    };
+    let blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..nc.div_ceil(GALERKIN_ROWS))
+        .into_par_iter()
+        .map_init(
+            || (Acc::new(nc), vec![u32::MAX; n], Vec::<u32>::new()),
+            |(acc, loc, need), b| {
+                let lo = b * GALERKIN_ROWS;
+                let hi = (lo + GALERKIN_ROWS).min(nc);
+                // The fine rows of A P this block needs, and A P on them.
+                need.clear();
+                need.extend_from_slice(&r.cols[r.offsets[lo]..r.offsets[hi]]);
+                need.sort_unstable();
+                need.dedup();
+                let mut ap_off = Vec::with_capacity(need.len() + 1);
+                ap_off.push(0usize);
+                let (mut ap_c, mut ap_v) = (Vec::new(), Vec::new());
+                for (k, &i) in need.iter().enumerate() {
+                    loc[i as usize] = k as u32;
+                    ap_row(i as usize, acc);
+                    acc.drain(&mut ap_c, &mut ap_v);
+                    ap_off.push(ap_c.len());
+                }
+                // Rows lo..hi of R (A P).
+                let mut lens = Vec::with_capacity(hi - lo);
+                let (mut cols, mut vals) = (Vec::new(), Vec::new());
+                for i in lo..hi {
+                    for k in r.offsets[i]..r.offsets[i + 1] {
+                        let l = loc[r.cols[k] as usize] as usize;
+                        let v = r.vals[k];
+                        for q in ap_off[l]..ap_off[l + 1] {
+                            acc.add(ap_c[q], v * ap_v[q]);
+                        }
+                    }
+                    lens.push(acc.drain(&mut cols, &mut vals));
+                }
+                for &i in need.iter() {
+                    loc[i as usize] = u32::MAX;
+                }
+                (lens, cols, vals)
+            },
+        )
+        .collect();
+    let rap = concat_blocks(nc, nc, blocks);
     // Split off the diagonal and symmetrise round-off: a_ij ← (a_ij + a_ji) / 2 is not
     // needed for CG's correctness, the product RAP is symmetric up to round-off only.
     let mut diag = vec![0.0; nc];

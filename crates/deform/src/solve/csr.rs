@@ -163,7 +163,7 @@ impl SymMatrix {
 
     /// One row's product (a_ii x_i + Σ_j a_ij x_j) for the three components.
     #[inline]
-    fn row_mul(&self, i: usize, x: &[V3]) -> V3 {
+    pub(crate) fn row_mul(&self, i: usize, x: &[V3]) -> V3 {
         let d = self.diag[i];
         let xi = x[i];
         let mut s = [d * xi[0], d * xi[1], d * xi[2]];

@@ -154,8 +154,7 @@ pub fn pcg<P: Preconditioner + ?Sized>(
 ) -> SolveReport {
     let t0 = Instant::now();
     let n = a.n();
-    let mut bp = b.to_vec();
-    cons.project(&mut bp);
+    let bp = projected(b, cons);
     cons.project(x);
     let bnorm = norm(&bp);
     let mut r = vec![[0.0; 3]; n];
@@ -203,11 +202,22 @@ pub fn pcg<P: Preconditioner + ?Sized>(
         rz = rz_new;
         xpby(&z, beta, &mut p);
     }
-    // True residual.
-    let mut rtrue = vec![[0.0; 3]; n];
-    a.residual(&bp, x, &mut rtrue);
-    cons.project(&mut rtrue);
-    report(it, norm(&rtrue) / scale, t0)
+    // True residual (in z's storage: not needed any more).
+    let rtrue = &mut z;
+    a.residual(&bp, x, rtrue);
+    cons.project(rtrue);
+    report(it, norm(rtrue) / scale, t0)
+}
+
+/// `b` projected on the constraints (borrowed as it is when there is none: no copy).
+fn projected<'b>(b: &'b [V3], cons: &Constraints) -> std::borrow::Cow<'b, [V3]> {
+    if cons.is_empty() {
+        std::borrow::Cow::Borrowed(b)
+    } else {
+        let mut bp = b.to_vec();
+        cons.project(&mut bp);
+        std::borrow::Cow::Owned(bp)
+    }
 }
 
 /// r ← r − α q, returns |r|².
@@ -246,8 +256,7 @@ pub fn point_iteration(
 ) -> SolveReport {
     let t0 = Instant::now();
     let n = a.n();
-    let mut bp = b.to_vec();
-    cons.project(&mut bp);
+    let bp = projected(b, cons);
     cons.project(x);
     let bnorm = norm(&bp);
     let scale = if bnorm > 0.0 { bnorm } else { 1.0 };
