@@ -859,19 +859,34 @@ fn step(
     if opts.adapt_rotation && !cls.skin.is_empty() {
         let mut acc: Vec<[f64; 4]> = vec![[0.0; 4]; n];
         let mut touched = vec![false; n];
-        for e in &cls.skin {
-            let p0: Vec<[f64; 3]> = e.iter().map(|&v| cur[v as usize]).collect();
-            let p1: Vec<[f64; 3]> = e.iter().map(|&v| target[v as usize]).collect();
-            let Some(r) = element_rotation(&p0, &p1) else {
+        // Per element (in parallel; the sums below run in element order): its rotation as
+        // a quaternion and its size as the weight.
+        let cur_ro: &[[f64; 3]] = cur;
+        let rots: Vec<Option<([f64; 4], f64)>> = cls
+            .skin
+            .par_iter()
+            .with_min_len(256)
+            .map(|e| {
+                let k = e.len().min(3);
+                let (mut p0, mut p1) = ([[0.0; 3]; 3], [[0.0; 3]; 3]);
+                for (j, &v) in e.iter().take(k).enumerate() {
+                    p0[j] = cur_ro[v as usize];
+                    p1[j] = target[v as usize];
+                }
+                let r = element_rotation(&p0[..k], &p1[..k])?;
+                let mut q = quat(&r);
+                if mesh.dim == 2 {
+                    // Plane grids rotate about z only (drop the round-off of the SVD).
+                    let l = (q[2] * q[2] + q[3] * q[3]).sqrt();
+                    q = [0.0, 0.0, q[2] / l, q[3] / l];
+                }
+                Some((q, element_size(&p0[..k])))
+            })
+            .collect();
+        for (e, rot) in cls.skin.iter().zip(&rots) {
+            let Some((q, w)) = *rot else {
                 continue;
             };
-            let w = element_size(&p0);
-            let mut q = quat(&r);
-            if mesh.dim == 2 {
-                // Plane grids rotate about z only (drop the round-off of the SVD).
-                let l = (q[2] * q[2] + q[3] * q[3]).sqrt();
-                q = [0.0, 0.0, q[2] / l, q[3] / l];
-            }
             for &v in e {
                 let a = &mut acc[v as usize];
                 for k in 0..4 {
