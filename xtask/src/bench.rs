@@ -84,7 +84,9 @@ pub fn run(root: &Path, args: &[String]) -> Result<(), String> {
         ));
     }
     print!("{md}");
-    let out = target.join("bench").join("summary.md");
+    let dir = target.join("bench");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let out = dir.join("summary.md");
     crate::fixtures::write_atomic(&out, md.as_bytes())?;
     println!("\nsummary written to {}", out.display());
     Ok(())
