@@ -94,6 +94,9 @@ pub enum StiffnessChoice {
     InverseLengthSquared,
     /// K = (1 / l²)(V̄ / V_ij).
     Volume,
+    /// K = (1 / l²)(1 + (ℓ / d)²), d the edge's distance to the moving boundary
+    /// (`deform::Stiffness::WallDistance`: stiffens the cells near the wall).
+    WallDistance,
 }
 
 /// Linear solver choice of the case file (see `deform::SolverKind`).
@@ -155,6 +158,7 @@ impl DeformSettings {
                 StiffnessChoice::InverseLength => deform::Stiffness::InverseLength,
                 StiffnessChoice::InverseLengthSquared => deform::Stiffness::InverseLengthSquared,
                 StiffnessChoice::Volume => deform::Stiffness::Volume,
+                StiffnessChoice::WallDistance => deform::Stiffness::WallDistance,
             },
             adapt_rotation: self.adapt_rotation,
             solver: match self.solver {

@@ -211,3 +211,22 @@ fn wrong_length_design_vector_is_an_error() {
     let e = s.evaluate(&[0.0]).unwrap_err().to_string();
     assert!(e.contains("design variables"), "{e}");
 }
+
+#[test]
+fn wall_distance_stiffness_from_the_case_file() {
+    // The default case with `deform: (stiffness: WallDistance)`: read from RON like a user's
+    // case file, then the same checks as the default design vector.
+    let dir = case_dir("default");
+    let path = dir.join("case.ron");
+    let mut case = aeroshape::case::Case::load(&path).unwrap();
+    let text = "(stiffness: WallDistance)";
+    case.deform = ron::from_str(text).unwrap();
+    assert_eq!(
+        case.deform.options().stiffness,
+        deform::Stiffness::WallDistance
+    );
+    let s = Study::new(case, &path).unwrap();
+    let dv = load_design_values(&dir.join("dv.ron")).unwrap();
+    let x = s.vector_from_values(&dv).unwrap();
+    check_design_vector("default, wall distance", &s, &x);
+}
