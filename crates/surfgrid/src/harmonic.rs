@@ -11,8 +11,6 @@
 //! above [`MAX_FACTOR_FLOPS`]) is solved by conjugate gradients to a relative residual of
 //! 1e-8 instead (smoothing follows the map, so a more accurate map buys nothing there).
 
-use std::collections::VecDeque;
-
 /// Largest estimated cost (multiply–adds) of a direct factorisation; above it the map is
 /// solved iteratively.
 pub const MAX_FACTOR_FLOPS: f64 = 4e8;
@@ -102,43 +100,6 @@ impl HarmonicMap {
         &self.free_adj[self.free_ptr[i]..self.free_ptr[i + 1]]
     }
 
-    /// Reverse Cuthill–McKee order of the free nodes (each connected part started from a
-    /// node of least degree).
-    fn rcm(&self) -> Vec<u32> {
-        let m = self.degree.len();
-        let deg = |i: usize| self.free_ptr[i + 1] - self.free_ptr[i];
-        let mut seeds: Vec<u32> = (0..m as u32).collect();
-        seeds.sort_by_key(|&i| (deg(i as usize), i));
-        let mut seen = vec![false; m];
-        let mut order = Vec::with_capacity(m);
-        let mut queue = VecDeque::new();
-        let mut nb = Vec::new();
-        for &s in &seeds {
-            if seen[s as usize] {
-                continue;
-            }
-            seen[s as usize] = true;
-            queue.push_back(s);
-            while let Some(v) = queue.pop_front() {
-                order.push(v);
-                nb.clear();
-                nb.extend(
-                    self.free_neighbours(v as usize)
-                        .iter()
-                        .copied()
-                        .filter(|&w| !seen[w as usize]),
-                );
-                nb.sort_by_key(|&w| (deg(w as usize), w));
-                for &w in &nb {
-                    seen[w as usize] = true;
-                    queue.push_back(w);
-                }
-            }
-        }
-        order.reverse();
-        order
-    }
-
     /// Envelope Cholesky in RCM order; `None` when too costly or not positive definite (a
     /// free part without a fixed neighbour).
     fn factorise(&self) -> Option<Envelope> {
@@ -146,7 +107,7 @@ impl HarmonicMap {
         if m == 0 {
             return None;
         }
-        let order = self.rcm();
+        let order = mesh::order::reverse_cuthill_mckee(m, |i| self.free_neighbours(i));
         let mut pos = vec![0usize; m];
         for (p, &i) in order.iter().enumerate() {
             pos[i as usize] = p;
@@ -211,14 +172,7 @@ impl HarmonicMap {
             return;
         }
         for comp in 0..2 {
-            let b: Vec<f64> = (0..m)
-                .map(|i| {
-                    self.fixed_adj[self.fixed_ptr[i]..self.fixed_ptr[i + 1]]
-                        .iter()
-                        .map(|&w| d[w as usize][comp])
-                        .sum()
-                })
-                .collect();
+            let b = self.rhs(d, comp);
             let x = match &self.factor {
                 Some(f) => f.solve(&b),
                 None => self.cg(&b),
@@ -227,6 +181,19 @@ impl HarmonicMap {
                 d[i + self.n_fixed][comp] = v;
             }
         }
+    }
+
+    /// Right-hand side of coordinate `comp`: per free node, the sum of its fixed neighbours'
+    /// boundary data.
+    fn rhs(&self, d: &[[f64; 2]], comp: usize) -> Vec<f64> {
+        (0..self.degree.len())
+            .map(|i| {
+                self.fixed_adj[self.fixed_ptr[i]..self.fixed_ptr[i + 1]]
+                    .iter()
+                    .map(|&w| d[w as usize][comp])
+                    .sum()
+            })
+            .collect()
     }
 
     /// Conjugate gradients from zero to a relative residual of 1e-8.
@@ -353,15 +320,7 @@ mod tests {
             .collect();
         map.solve(&mut d);
         let mut it = d.clone();
-        let b: Vec<f64> = (0..uv.len() - nb)
-            .map(|i| {
-                map.fixed_adj[map.fixed_ptr[i]..map.fixed_ptr[i + 1]]
-                    .iter()
-                    .map(|&w| it[w as usize][0])
-                    .sum()
-            })
-            .collect();
-        let x = map.cg(&b);
+        let x = map.cg(&map.rhs(&d, 0));
         for (k, v) in x.iter().enumerate() {
             it[k + nb][0] = *v;
         }

@@ -1,91 +1,13 @@
 //! Reverse Cuthill–McKee renumbering: a bandwidth-reducing order so that the neighbours of
 //! a row sit close together in memory (used internally; files keep the user's numbering).
 
-use std::collections::VecDeque;
-
 use super::csr::Graph;
 
-/// Returns the reverse Cuthill–McKee order as a permutation `perm` (new index k is old node
-/// `perm[k]`). Each connected component starts from a pseudo-peripheral node found by
-/// repeated breadth-first searches; neighbours are visited by increasing degree (ties by
-/// index), so the result is deterministic.
+/// Returns the reverse Cuthill–McKee order of `g` as a permutation `perm` (new index k is old
+/// node `perm[k]`): [`mesh::order::reverse_cuthill_mckee`] (pseudo-peripheral starts,
+/// neighbours by increasing degree; deterministic).
 pub fn reverse_cuthill_mckee(g: &Graph) -> Vec<u32> {
-    let n = g.len();
-    let deg = |i: usize| g.offsets[i + 1] - g.offsets[i];
-    let mut visited = vec![false; n];
-    let mut order: Vec<u32> = Vec::with_capacity(n);
-    let mut level = vec![u32::MAX; n];
-    let mut nb: Vec<u32> = Vec::new();
-    for seed in 0..n {
-        if visited[seed] {
-            continue;
-        }
-        let start = pseudo_peripheral(g, seed, &mut level);
-        let mut queue = VecDeque::new();
-        visited[start] = true;
-        queue.push_back(start as u32);
-        while let Some(i) = queue.pop_front() {
-            order.push(i);
-            nb.clear();
-            nb.extend(
-                g.neighbours(i as usize)
-                    .iter()
-                    .copied()
-                    .filter(|&j| !visited[j as usize]),
-            );
-            nb.sort_by_key(|&j| (deg(j as usize), j));
-            for &j in &nb {
-                visited[j as usize] = true;
-                queue.push_back(j);
-            }
-        }
-    }
-    order.reverse();
-    order
-}
-
-/// A node of (nearly) maximal eccentricity in the component of `seed`: repeat BFS from the
-/// farthest node of smallest degree while the depth grows.
-fn pseudo_peripheral(g: &Graph, seed: usize, level: &mut [u32]) -> usize {
-    let mut start = seed;
-    let mut depth = 0;
-    for _ in 0..8 {
-        let (far, d, touched) = bfs_far(g, start, level);
-        for &t in &touched {
-            level[t as usize] = u32::MAX;
-        }
-        if d <= depth {
-            break;
-        }
-        depth = d;
-        start = far;
-    }
-    start
-}
-
-fn bfs_far(g: &Graph, start: usize, level: &mut [u32]) -> (usize, u32, Vec<u32>) {
-    let mut touched = vec![start as u32];
-    level[start] = 0;
-    let mut head = 0;
-    while head < touched.len() {
-        let i = touched[head] as usize;
-        head += 1;
-        for &j in g.neighbours(i) {
-            if level[j as usize] == u32::MAX {
-                level[j as usize] = level[i] + 1;
-                touched.push(j);
-            }
-        }
-    }
-    let maxl = level[*touched.last().unwrap_or(&(start as u32)) as usize];
-    let deg = |i: usize| g.offsets[i + 1] - g.offsets[i];
-    let far = touched
-        .iter()
-        .rev()
-        .take_while(|&&t| level[t as usize] == maxl)
-        .min_by_key(|&&t| (deg(t as usize), t))
-        .map_or(start, |&t| t as usize);
-    (far, maxl, touched)
+    mesh::order::reverse_cuthill_mckee(g.len(), |i| g.neighbours(i))
 }
 
 /// Bandwidth max_i max_{j ∈ N(i)} |i − j| of a graph under a permutation (diagnostics).
