@@ -308,13 +308,7 @@ fn figures() {
             );
         }
         if quick {
-            println!(
-                "peak RSS so far: {:.0} MB; load average: {}",
-                peak_rss_mb(),
-                std::fs::read_to_string("/proc/loadavg")
-                    .unwrap_or_default()
-                    .trim()
-            );
+            print_memory_and_load();
             continue;
         }
         // Without R and with the symmetry plane fixed (the naive setup), for comparison.
@@ -365,14 +359,19 @@ fn figures() {
                 d.report.iterations
             );
         }
-        println!(
-            "peak RSS so far: {:.0} MB; load average: {}",
-            peak_rss_mb(),
-            std::fs::read_to_string("/proc/loadavg")
-                .unwrap_or_default()
-                .trim()
-        );
+        print_memory_and_load();
     }
+}
+
+/// Prints the process's peak RSS so far and the machine's load average.
+fn print_memory_and_load() {
+    println!(
+        "peak RSS so far: {:.0} MB; load average: {}",
+        peak_rss_mb(),
+        std::fs::read_to_string("/proc/loadavg")
+            .unwrap_or_default()
+            .trim()
+    );
 }
 
 fn benches(c: &mut Criterion) {

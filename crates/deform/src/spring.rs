@@ -261,10 +261,8 @@ struct SolverState {
     /// Δx of Eq. 21 per unknown (empty when nothing was solved).
     dx: Vec<V3>,
     /// The Eq. 26 solution per unknown: the quaternion's vector part as solved (before the
-    /// clamp to |u| ≤ 1; empty without R).
+    /// clamp to |u| ≤ 1; empty without R). The scalar part is derived from it.
     qv: Vec<V3>,
-    /// The scalar part derived from it, √(1 − |u|²) (not an unknown of the solve).
-    qw: Vec<f64>,
     /// Parameters of the nodes sliding on supports (classification order).
     params: Vec<[f64; 2]>,
 }
@@ -737,7 +735,6 @@ struct StepOut {
     /// was solved).
     dx: Vec<V3>,
     qv: Vec<V3>,
-    qw: Vec<f64>,
     iterations: usize,
     rot_iterations: usize,
     residual: f64,
@@ -814,7 +811,6 @@ fn step(
     let mut out = StepOut {
         dx: Vec::new(),
         qv: Vec::new(),
-        qw: Vec::new(),
         iterations: 0,
         rot_iterations: 0,
         residual: 0.0,
@@ -854,7 +850,7 @@ fn step(
     // R: unit quaternions per node (vector part, scalar part); identity by default.
     let t = Instant::now();
     let mut qv: Vec<V3> = vec![[0.0; 3]; n];
-    let mut qw: Vec<V3> = vec![[1.0, 0.0, 0.0]; n];
+    let mut qw: Vec<f64> = vec![1.0; n];
     let mut any_rot = false;
     if opts.adapt_rotation && !cls.skin.is_empty() {
         let mut acc: Vec<[f64; 4]> = vec![[0.0; 4]; n];
@@ -901,7 +897,7 @@ fn step(
                 let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + a[3] * a[3]).sqrt();
                 if l > 0.0 && (a[0], a[1], a[2]) != (0.0, 0.0, 0.0) {
                     qv[i] = [a[0] / l, a[1] / l, a[2] / l];
-                    qw[i] = [a[3] / l, 0.0, 0.0];
+                    qw[i] = a[3] / l;
                     any_rot = true;
                 }
             }
@@ -922,7 +918,6 @@ fn step(
             let rv = solve_one(a, &bv, &mut xv, &Constraints::default(), pre, opts, 1.0);
             drop(bv);
             out.rot_iterations = rv.iterations;
-            let mut scalar = Vec::with_capacity(nu);
             for (k, &i) in sys.node_of.iter().enumerate() {
                 let v = xv[k];
                 let s2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
@@ -933,11 +928,9 @@ fn step(
                     ([v[0] / l, v[1] / l, v[2] / l], 0.0)
                 };
                 qv[i as usize] = u;
-                qw[i as usize] = [w, 0.0, 0.0];
-                scalar.push(w);
+                qw[i as usize] = w;
             }
             out.qv = xv;
-            out.qw = scalar;
         }
     }
     times.rotation += t.elapsed().as_secs_f64();
@@ -962,7 +955,7 @@ fn step(
                 qv[i][1] + qv[j][1],
                 qv[i][2] + qv[j][2],
             ];
-            let mut w = qw[i][0] + qw[j][0];
+            let mut w = qw[i] + qw[j];
             let l = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2] + w * w).sqrt();
             if l == 0.0 {
                 continue;
@@ -1556,7 +1549,7 @@ impl<'s> Deformer<'s> {
                 }
                 if inc == 1 {
                     // The solutions from the baseline (later increments start elsewhere).
-                    (state.dx, state.qv, state.qw) = (o.dx, o.qv, o.qw);
+                    (state.dx, state.qv) = (o.dx, o.qv);
                 }
             }
             progress("quality", inc, inc);
