@@ -66,13 +66,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     study.forget_warm_start();
     let (tc, cold) = timed(&study, &step)?;
     show("step 1.01 x (cold)", tc, &cold);
-    let diff = warm
-        .grid
-        .coords
-        .iter()
-        .zip(&cold.grid.coords)
-        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
-        .fold(0.0, f64::max);
+    let diff = testkit::max_coordinate_difference(&warm.grid.coords, &cold.grid.coords);
     println!("step warm vs cold: largest coordinate difference {diff:.2e}");
     let zero = study.evaluate(&study.initial())?;
     println!(

@@ -170,14 +170,6 @@ fn no_state_leaks_between_evaluations() {
     assert_eq!(a.grid.coords, b.grid.coords);
 }
 
-/// Largest coordinate difference of two grids.
-fn max_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
-        .fold(0.0, f64::max)
-}
-
 #[test]
 fn warm_start_agrees_with_a_cold_evaluation_and_saves_the_solves() {
     let (s, x) = study("default");
@@ -194,14 +186,14 @@ fn warm_start_agrees_with_a_cold_evaluation_and_saves_the_solves() {
     );
     // The solves stop at a relative residual of 1e-8 and the sliding at 1e-9 of the motion:
     // the two answers agree far below the wall motion (0.3 at most).
-    let err = max_difference(&warm.grid.coords, &cold.grid.coords);
+    let err = testkit::max_coordinate_difference(&warm.grid.coords, &cold.grid.coords);
     assert!(err < 1e-7, "warm vs cold: {err:.3e}");
     assert_eq!(warm.report.quality_after.inverted, 0);
     // The same vector again: no solver iteration, the same grid to round-off.
     let again = s.evaluate(&x).unwrap();
     assert_eq!(again.report.deform.iterations, 0);
     assert_eq!(again.report.deform.rotation_iterations, 0);
-    let err = max_difference(&again.grid.coords, &cold.grid.coords);
+    let err = testkit::max_coordinate_difference(&again.grid.coords, &cold.grid.coords);
     assert!(err < 1e-13, "repeat: {err:.3e}");
 }
 

@@ -54,6 +54,16 @@ pub fn check_close(a: &[f64], b: &[f64], rel: f64, abs: f64) -> Result<(), Strin
     Ok(())
 }
 
+/// Largest difference of one coordinate between two point sets of the same numbering
+/// (max over points and components of |p_k − q_k|).
+pub fn max_coordinate_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    assert_eq!(a.len(), b.len(), "point sets of different lengths");
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max)
+}
+
 /// Views a value as a slice of `f64` for [`assert_close!`].
 pub trait AsF64Slice {
     /// The values as a slice.

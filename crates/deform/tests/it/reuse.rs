@@ -122,12 +122,7 @@ fn deformer_warm_start_from_the_same_motion_takes_no_iteration() {
     assert_eq!(again.report.iterations, 0);
     assert_eq!(again.report.rotation_iterations, 0);
     // The same answer up to the round-off of re-applying the plane constraints.
-    let err = again
-        .coords
-        .iter()
-        .zip(&first.coords)
-        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
-        .fold(0.0, f64::max);
+    let err = testkit::max_coordinate_difference(&again.coords, &first.coords);
     assert!(err <= 1e-15, "{err:.3e}");
 }
 

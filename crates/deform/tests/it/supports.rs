@@ -169,19 +169,9 @@ fn flat_support_gives_the_sliding_plane_solution() {
     let a =
         deform_on_supports(&m, &bc(-8.0, MarkerRole::SlideOnSupport), &supports, &opts).unwrap();
     let b = deform::deform(&m, &bc(-8.0, MarkerRole::SlidePlane), &opts).unwrap();
-    let err = a
-        .coords
-        .iter()
-        .zip(&b.coords)
-        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
-        .fold(0.0, f64::max);
+    let err = testkit::max_coordinate_difference(&a.coords, &b.coords);
     assert!(err < 1e-9, "support vs plane sliding: {err:e}");
-    let moved = m
-        .coords
-        .iter()
-        .zip(&a.coords)
-        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
-        .fold(0.0, f64::max);
+    let moved = testkit::max_coordinate_difference(&m.coords, &a.coords);
     assert!(moved > 0.05, "{moved}");
 }
 
