@@ -135,13 +135,25 @@ impl KnotVector {
 
     /// The p+1 non-zero basis functions at t, N_{s-p..=s}, written to `out[..p+1]`;
     /// returns the span s (A2.2).
+    /// No heap allocation for degrees below 16.
     pub fn basis_into(&self, t: f64, out: &mut [f64]) -> usize {
+        const N: usize = 16;
+        let p = self.degree;
+        if p < N {
+            let (mut left, mut right) = ([0.0; N], [0.0; N]);
+            self.basis_with(t, out, &mut left, &mut right)
+        } else {
+            let (mut left, mut right) = (vec![0.0; p + 1], vec![0.0; p + 1]);
+            self.basis_with(t, out, &mut left, &mut right)
+        }
+    }
+
+    /// [`KnotVector::basis_into`] with `left` and `right` (at least p + 1 long) as scratch.
+    fn basis_with(&self, t: f64, out: &mut [f64], left: &mut [f64], right: &mut [f64]) -> usize {
         let p = self.degree;
         let s = self.find_span(t);
         let t = t.clamp(self.domain().0, self.domain().1);
         let k = &self.knots;
-        let mut left = vec![0.0; p + 1];
-        let mut right = vec![0.0; p + 1];
         out[0] = 1.0;
         for j in 1..=p {
             left[j] = t - k[s + 1 - j];

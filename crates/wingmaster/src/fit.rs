@@ -552,7 +552,7 @@ fn fit_from(
             jac[(i, nd)] = -(n[0] * (1.0 - e.p[0]) - n[1] * e.p[1]);
             jac[(i, nd + 1)] = -(n[0] * e.p[1] + n[1] * (1.0 - e.p[0]));
             let n = [ma * n[0] + mb * n[1], -mb * n[0] + ma * n[1]];
-            let span = crate::piecewise::basis_into(tk, e.t, &mut local);
+            let span = tk.basis_into(e.t, &mut local);
             let c = sec.sec.camber_z(x);
             let r = sec.sec.ramp(x);
             for j in 0..nt {
@@ -570,7 +570,7 @@ fn fit_from(
                 jac[(i, j)] = -(n[0] * dx + n[1] * pz);
             }
             if nd > nt {
-                let cspan = crate::piecewise::basis_into(&camber_kv, x.clamp(0.0, 1.0), &mut cb);
+                let cspan = camber_kv.basis_into(x.clamp(0.0, 1.0), &mut cb);
                 let cp = camber_kv.degree();
                 for j in nt..nd {
                     jac[(i, j)] = 0.0;
