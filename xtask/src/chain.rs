@@ -27,20 +27,7 @@ pub fn run_case(root: &Path, case_dir: &str, out: &Path) -> Result<PathBuf, Stri
         dv.display().to_string(),
         out.display().to_string(),
     );
-    crate::cargo(&[
-        "run",
-        "--release",
-        "-q",
-        "-p",
-        "aeroshape",
-        "--",
-        "run",
-        &case_s,
-        "--dv",
-        &dv_s,
-        "-o",
-        &out_s,
-    ])?;
+    crate::aeroshape(None, &["run", &case_s, "--dv", &dv_s, "-o", &out_s])?;
     Ok(out.to_path_buf())
 }
 

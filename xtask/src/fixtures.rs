@@ -104,22 +104,9 @@ pub fn case_grids(root: &Path) -> Result<(), String> {
             .display()
             .to_string();
         let h = format!("{}", c.h_wall);
-        let mut a: Vec<&str> = vec![
-            "run",
-            "--release",
-            "-q",
-            "-p",
-            "aeroshape",
-            "--example",
-            "chain_fixture",
-            "--",
-            "surface",
-            &geom,
-            &h,
-            &surf,
-        ];
+        let mut a: Vec<&str> = vec!["surface", &geom, &h, &surf];
         a.extend(c.groups.iter().copied());
-        crate::cargo(&a)?;
+        crate::aeroshape(Some("chain_fixture"), &a)?;
         let bbox: Vec<String> = c.bbox.iter().map(|v| v.to_string()).collect();
         let mut py = std::process::Command::new("python3");
         py.arg(root.join("fixtures/cases/make_volume.py"))
@@ -132,21 +119,7 @@ pub fn case_grids(root: &Path) -> Result<(), String> {
             return Err(format!("make_volume.py failed for case {} ({st})", c.dir));
         }
         let out = dir.join("grid.msh").display().to_string();
-        crate::cargo(&[
-            "run",
-            "--release",
-            "-q",
-            "-p",
-            "aeroshape",
-            "--example",
-            "chain_fixture",
-            "--",
-            "attach",
-            &geom,
-            &h,
-            &vol,
-            &out,
-        ])?;
+        crate::aeroshape(Some("chain_fixture"), &["attach", &geom, &h, &vol, &out])?;
     }
     Ok(())
 }

@@ -62,6 +62,18 @@ pub fn cargo(args: &[&str]) -> Result<(), String> {
     }
 }
 
+/// Runs the `aeroshape` program (or its example `example`) in the release profile with the
+/// arguments `args`.
+pub fn aeroshape(example: Option<&str>, args: &[&str]) -> Result<(), String> {
+    let mut a = vec!["run", "--release", "-q", "-p", "aeroshape"];
+    if let Some(e) = example {
+        a.extend(["--example", e]);
+    }
+    a.push("--");
+    a.extend_from_slice(args);
+    cargo(&a)
+}
+
 fn ci() -> Result<(), String> {
     cargo(&["fmt", "--all", "--", "--check"])?;
     cargo(&[

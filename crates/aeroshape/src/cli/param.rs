@@ -195,21 +195,13 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
         }
         None => reg.initial(),
     };
-    let cm = case
-        .parametrisation
-        .constraint_matrix()
-        .with_context(|| a.case.display().to_string())?;
-    let violations = cm.violations(&x);
-    for v in &violations {
-        eprintln!("warning: {v}");
-    }
-    if !violations.is_empty() && !a.allow_infeasible {
-        bail!(
-            "{} linear constraint(s) violated (first: {}); use --allow-infeasible to apply anyway",
-            violations.len(),
-            violations[0]
-        );
-    }
+    check_constraints(
+        &case.parametrisation,
+        &x,
+        &a.case,
+        a.allow_infeasible,
+        "apply",
+    )?;
     let (pts, jac) = if a.jacobian.is_some() {
         let (p, j) = prep.apply_with_jacobian(&x)?;
         (p, Some(j))
@@ -255,6 +247,33 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
             j.n_rows,
             j.n_cols,
             j.nnz()
+        );
+    }
+    Ok(())
+}
+
+/// Checks the design vector `x` against the linear constraints of `par` (the case file
+/// `case`): every violated constraint is a warning on stderr, and any violation is an error
+/// unless `allow_infeasible` (the message suggests the flag, `verb` naming what it allows).
+pub(crate) fn check_constraints(
+    par: &param::Parametrisation,
+    x: &[f64],
+    case: &std::path::Path,
+    allow_infeasible: bool,
+    verb: &str,
+) -> anyhow::Result<()> {
+    let cm = par
+        .constraint_matrix()
+        .with_context(|| case.display().to_string())?;
+    let violations = cm.violations(x);
+    for v in &violations {
+        eprintln!("warning: {v}");
+    }
+    if !violations.is_empty() && !allow_infeasible {
+        bail!(
+            "{} linear constraint(s) violated (first: {}); use --allow-infeasible to {verb} anyway",
+            violations.len(),
+            violations[0]
         );
     }
     Ok(())

@@ -105,22 +105,13 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         }
         None => study.initial(),
     };
-    let cm = study
-        .case()
-        .parametrisation
-        .constraint_matrix()
-        .with_context(|| a.case.display().to_string())?;
-    let violations = cm.violations(&x);
-    for v in &violations {
-        eprintln!("warning: {v}");
-    }
-    if !violations.is_empty() && !a.allow_infeasible {
-        anyhow::bail!(
-            "{} linear constraint(s) violated (first: {}); use --allow-infeasible to run anyway",
-            violations.len(),
-            violations[0]
-        );
-    }
+    super::param::check_constraints(
+        &study.case().parametrisation,
+        &x,
+        &a.case,
+        a.allow_infeasible,
+        "run",
+    )?;
     let ev = study.evaluate_with_progress(&x, &mut |p| eprintln!("[run] {p}"))?;
     let r = &ev.report;
     eprintln!(
