@@ -55,6 +55,7 @@ use geom_db::GeomDb;
 use geom_db::prelude::Point3;
 use mesh::{ElementKind, Elements, Marker, Mesh};
 use param::{MasterSources, Prepared};
+use rayon::prelude::*;
 use serde::Serialize;
 use surfgrid::{ClassifyOptions, NodeSupport, SurfaceGrid};
 
@@ -796,14 +797,20 @@ impl Study {
         }
         let (cell_quality, quality_after) =
             deformed_quality.unwrap_or_else(|| (self.quality.clone(), self.quality_before));
-        let mut wall_support: f64 = 0.0;
-        for (i, w) in self.wall.iter().enumerate() {
-            if *w {
+        // Every wall node against its support evaluated anew (in parallel; a maximum does
+        // not depend on the order).
+        let wall_support = self
+            .wall
+            .par_iter()
+            .enumerate()
+            .with_min_len(256)
+            .filter(|(_, w)| **w)
+            .map(|(i, _)| {
                 let e = surface.evaluate_node(&geometry, i);
                 let p = grid.coords[i];
-                wall_support = wall_support.max((Point3::new(p[0], p[1], p[2]) - e).norm() / lref);
-            }
-        }
+                (Point3::new(p[0], p[1], p[2]) - e).norm() / lref
+            })
+            .reduce(|| 0.0, f64::max);
         let report = Report {
             design: reg
                 .names()

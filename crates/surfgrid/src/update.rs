@@ -132,6 +132,21 @@ pub struct Updater {
     /// Node and triangle counts per component (checks that a grid is the one set up).
     shape: Vec<(usize, usize, usize)>,
     maps: Vec<OnceLock<HarmonicMap>>,
+    /// The node positions of the grid set up, and per component its worst triangle quality
+    /// there (recomputed for a grid of the same topology at other positions).
+    coords: Vec<Point3>,
+    worst_initial: Vec<f64>,
+}
+
+/// Per component of `grid`, the worst signed triangle quality.
+fn worst_per_component(grid: &SurfaceGrid) -> Vec<f64> {
+    grid.components
+        .iter()
+        .map(|cg| {
+            let x0: Vec<Point3> = cg.nodes.iter().map(|&g| grid.coords[g as usize]).collect();
+            worst(&cg.triangles, &cg.uv, &x0)
+        })
+        .collect()
 }
 
 impl Updater {
@@ -144,6 +159,8 @@ impl Updater {
                 .map(|c| (c.nodes.len(), c.n_boundary, c.triangles.len()))
                 .collect(),
             maps: grid.components.iter().map(|_| OnceLock::new()).collect(),
+            coords: grid.coords.clone(),
+            worst_initial: worst_per_component(grid),
         }
     }
 
@@ -165,7 +182,14 @@ impl Updater {
                 what: "the grid is not the one the updater was made for".into(),
             });
         }
-        update_with(grid, old, new, opts, &self.maps)
+        let other;
+        let worst_initial = if grid.coords == self.coords {
+            &self.worst_initial
+        } else {
+            other = worst_per_component(grid);
+            &other
+        };
+        update_with(grid, old, new, opts, &self.maps, worst_initial)
     }
 }
 
@@ -175,6 +199,7 @@ fn update_with(
     new: &GeomDb,
     opts: &UpdateOptions,
     maps: &[OnceLock<HarmonicMap>],
+    worst_initial: &[f64],
 ) -> Result<(SurfaceGrid, UpdateReport)> {
     if old.corners.len() != new.corners.len()
         || old.curve_components.len() != new.curve_components.len()
@@ -245,8 +270,7 @@ fn update_with(
             max_shift = max_shift.max((f.uv[0] - uv[k][0]).abs().max((f.uv[1] - uv[k][1]).abs()));
             uv[k] = f.uv;
         }
-        let x0: Vec<Point3> = cg.nodes.iter().map(|&g| grid.coords[g as usize]).collect();
-        let worst_initial = worst(&cg.triangles, &cg.uv, &x0);
+        let worst_initial = worst_initial[ci];
         let remapped = max_shift > 0.0;
         if remapped {
             let mut d: Vec<[f64; 2]> = (0..uv.len())

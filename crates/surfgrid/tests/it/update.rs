@@ -59,6 +59,13 @@ fn wing_body_after_fuselage_radius_change() {
             .update(&g, &db, &new, &UpdateOptions::default())
             .unwrap();
         assert!(g3 == g2 && rep3 == rep, "reuse changes nothing");
+        // The updater on a grid of the same topology at other positions (g2, back to the
+        // initial model): still the free function's answer.
+        let back = update(&g2, &new, &same, &UpdateOptions::default()).unwrap();
+        let back_reused = updater
+            .update(&g2, &new, &same, &UpdateOptions::default())
+            .unwrap();
+        assert!(back.0 == back_reused.0 && back.1 == back_reused.1);
         assert!(rep.moved_nodes > 0);
         let remapped = rep.components.iter().filter(|c| c.remapped).count();
         assert!(
