@@ -309,14 +309,12 @@ fn jacobi_sweep(a: &SymMatrix, w: &[f64], b: &[V3], x: &mut [V3], r: &mut [V3]) 
 fn jacobi_sweep_into(a: &SymMatrix, w: &[f64], b: &[V3], x: &[V3], out: &mut [V3]) {
     out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, os)| {
         let r0 = c * CHUNK;
-        for (k, oi) in os.iter_mut().enumerate() {
-            let i = r0 + k;
-            let v = a.row_mul(i, x);
+        a.rows_mul(r0, r0 + os.len(), x, |i, v| {
             let ri = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
             let wk = w[i];
             let xi = x[i];
-            *oi = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
-        }
+            os[i - r0] = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
+        });
     });
 }
 
