@@ -71,12 +71,12 @@ pub struct Amg<'a> {
 
 /// Vectors of one level of the V-cycle: `b` and `out` are the level's right-hand side and
 /// result (empty on the finest level, where the caller's vectors are used), `x` the iterate
-/// and `r` the residual (empty on the coarsest level).
+/// (empty on the coarsest level). The residual is kept in `out`, which is free until the
+/// last smoothing sweep writes the result there (no residual vector of its own).
 struct Scratch {
     b: Vec<V3>,
     out: Vec<V3>,
     x: Vec<V3>,
-    r: Vec<V3>,
 }
 
 /// Summary of a hierarchy.
@@ -160,7 +160,6 @@ impl<'a> Amg<'a> {
                 b: vec![[0.0; 3]; io],
                 out: vec![[0.0; 3]; io],
                 x: vec![[0.0; 3]; n],
-                r: vec![[0.0; 3]; n],
             });
         }
         let nc = last.n();
@@ -168,7 +167,6 @@ impl<'a> Amg<'a> {
             b: vec![[0.0; 3]; nc],
             out: vec![[0.0; 3]; nc],
             x: Vec::new(),
-            r: Vec::new(),
         });
         Ok(Self {
             fine,
@@ -204,17 +202,9 @@ impl<'a> Amg<'a> {
         }
     }
 
-    /// out ← V-cycle applied to `b` on level `l`; `x`, `r` are the level's work vectors and
-    /// `deeper` the scratch of the coarser levels.
-    fn vcycle(
-        &self,
-        l: usize,
-        b: &[V3],
-        out: &mut [V3],
-        x: &mut [V3],
-        r: &mut [V3],
-        deeper: &mut [Scratch],
-    ) {
+    /// out ← V-cycle applied to `b` on level `l`; `x` is the level's iterate, `out` holds
+    /// the residual until the last sweep, `deeper` is the scratch of the coarser levels.
+    fn vcycle(&self, l: usize, b: &[V3], out: &mut [V3], x: &mut [V3], deeper: &mut [Scratch]) {
         if l == self.levels.len() {
             self.chol.solve(b, out);
             return;
@@ -234,26 +224,19 @@ impl<'a> Amg<'a> {
                 }
             });
         for _ in 1..self.sweeps {
-            jacobi_sweep(a, w, b, x, r);
+            jacobi_sweep(a, w, b, x, out);
         }
-        // Restrict the residual, solve the coarse problem.
-        a.residual(b, x, r);
+        // Restrict the residual (in `out`), solve the coarse problem.
+        a.residual(b, x, out);
         let (next, rest) = deeper
             .split_first_mut()
             .expect("one scratch per level below the finest");
-        spmv_csr(&lev.r, r, &mut next.b);
-        self.vcycle(
-            l + 1,
-            &next.b,
-            &mut next.out,
-            &mut next.x,
-            &mut next.r,
-            rest,
-        );
+        spmv_csr(&lev.r, out, &mut next.b);
+        self.vcycle(l + 1, &next.b, &mut next.out, &mut next.x, rest);
         // Prolongate and correct; post-smoothing, the last sweep written straight to `out`.
         spmv_csr_add(&lev.p, &next.out, x);
         for _ in 1..self.sweeps {
-            jacobi_sweep(a, w, b, x, r);
+            jacobi_sweep(a, w, b, x, out);
         }
         jacobi_sweep_into(a, w, b, x, out);
     }
@@ -270,7 +253,7 @@ impl Preconditioner for Amg<'_> {
             self.chol.solve(r, z);
             return;
         }
-        self.vcycle(0, r, z, &mut top.x, &mut top.r, deeper);
+        self.vcycle(0, r, z, &mut top.x, deeper);
     }
     fn name(&self) -> &'static str {
         "amg"
