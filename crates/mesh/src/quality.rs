@@ -153,15 +153,20 @@ fn per_element(
     f: impl Fn(ElementKind, &[u32]) -> f64 + Sync,
 ) -> Vec<f64> {
     let _ = mesh;
-    let mut out = Vec::with_capacity(set.len());
+    // Written in place, block by block in parallel (no per-group temporary, no copy).
+    let mut out = vec![0.0; set.len()];
+    let mut rest = &mut out[..];
     for g in set.groups() {
         let n = g.kind.n_nodes();
-        let part: Vec<f64> = g
-            .nodes
-            .par_chunks(n * 1024)
-            .flat_map_iter(|c| c.chunks_exact(n).map(|e| f(g.kind, e)))
-            .collect();
-        out.extend_from_slice(&part);
+        let (part, tail) = rest.split_at_mut(g.len());
+        part.par_chunks_mut(1024)
+            .zip(g.nodes.par_chunks(n * 1024))
+            .for_each(|(qs, c)| {
+                for (q, e) in qs.iter_mut().zip(c.chunks_exact(n)) {
+                    *q = f(g.kind, e);
+                }
+            });
+        rest = tail;
     }
     out
 }

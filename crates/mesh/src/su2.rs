@@ -2,8 +2,11 @@
 //! `MARKER_TAG` / `MARKER_ELEMS`. Trailing sections that SU2 tools append (periodic
 //! information, FFD boxes) are kept verbatim in [`Mesh::su2_extra`] and written back.
 //!
-//! The reader streams the input line by line through one reusable buffer; element codes are
-//! VTK cell types (3 line, 5 triangle, 9 quad, 10 tetra, 12 hexa, 13 prism, 14 pyramid).
+//! The reader streams the input line by line. The element and point sections are read in
+//! batches of lines (each batch parsed in parallel while the next one is read) and written in
+//! parallel blocks: the same grid, errors and bytes as a sequential reader and writer, for
+//! any thread count. Element codes are VTK cell types (3 line, 5 triangle, 9 quad, 10 tetra,
+//! 12 hexa, 13 prism, 14 pyramid).
 
 use std::io::{BufRead, Write};
 use std::path::Path;
@@ -196,10 +199,105 @@ fn count(cx: &Ctx<'_>, ln: usize, key: &str, val: &[u8]) -> Result<usize> {
 /// Lines per batch of the element reader.
 const BATCH: usize = 1 << 14;
 
-/// Reads `n` element lines into `set`. Lines are read sequentially into a batch buffer and
-/// parsed in parallel (rayon); results are applied in line order, so the grid and the first
-/// error reported are those of a sequential read.
-fn read_elements<R: BufRead>(
+/// One batch of lines of a section: their text, and per line (line number, start, end).
+#[derive(Default)]
+struct Batch {
+    text: Vec<u8>,
+    spans: Vec<(usize, usize, usize)>,
+    /// Index (within the section) of the batch's first item.
+    first: usize,
+    /// The read error that ended the batch early, if any.
+    err: Option<Error>,
+}
+
+impl Batch {
+    /// Reads the next lines of the section (items `first..`, at most [`BATCH`], fewer at the
+    /// section's end `n` or at a read error), skipping comments and blank lines.
+    fn fill<R: BufRead>(
+        &mut self,
+        rd: &mut LineReader<R>,
+        file: &str,
+        what: &str,
+        first: usize,
+        n: usize,
+    ) {
+        self.text.clear();
+        self.spans.clear();
+        self.first = first;
+        self.err = None;
+        while self.spans.len() < BATCH && first + self.spans.len() < n {
+            match rd.expect_line(file, what) {
+                Ok((ln, line)) => {
+                    if is_skippable(line) {
+                        continue;
+                    }
+                    let a = self.text.len();
+                    self.text.extend_from_slice(line);
+                    self.spans.push((ln, a, self.text.len()));
+                }
+                Err(e) => {
+                    self.err = Some(e);
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// Reads the `n` item lines of a section: lines are read sequentially by batches, each batch
+/// parsed in parallel (`parse(line number, text, item index)`) while the next batch is read
+/// (rayon::join), and the results applied in line order (`apply(item, line number)`), so the
+/// result and the first error reported are those of a sequential read.
+fn read_section<R, T, P, A>(
+    cx: &Ctx<'_>,
+    rd: &mut LineReader<R>,
+    n: usize,
+    what: &str,
+    parse: P,
+    mut apply: A,
+) -> Result<()>
+where
+    R: BufRead + Send,
+    T: Send,
+    P: Fn(usize, &[u8], usize) -> Result<T> + Sync,
+    A: FnMut(T, usize),
+{
+    let (mut cur, mut next) = (Batch::default(), Batch::default());
+    let mut parsed: Vec<Result<T>> = Vec::new();
+    cur.fill(rd, cx.file, what, 0, n);
+    loop {
+        let read = cur.first + cur.spans.len();
+        let more = cur.err.is_none() && read < n;
+        let parse_cur = |out: &mut Vec<Result<T>>| {
+            cur.spans
+                .par_iter()
+                .enumerate()
+                .map(|(k, &(ln, a, b))| parse(ln, &cur.text[a..b], cur.first + k))
+                .collect_into_vec(out);
+        };
+        if more {
+            rayon::join(
+                || next.fill(rd, cx.file, what, read, n),
+                || parse_cur(&mut parsed),
+            );
+        } else {
+            parse_cur(&mut parsed);
+        }
+        for (r, &(ln, _, _)) in parsed.drain(..).zip(&cur.spans) {
+            apply(r?, ln);
+        }
+        if let Some(e) = cur.err.take() {
+            return Err(e);
+        }
+        if !more {
+            return Ok(());
+        }
+        std::mem::swap(&mut cur, &mut next);
+    }
+}
+
+/// Reads `n` element lines into `set` ([`read_section`]).
+fn read_elements<R: BufRead + Send>(
     cx: &Ctx<'_>,
     rd: &mut LineReader<R>,
     n: usize,
@@ -209,35 +307,13 @@ fn read_elements<R: BufRead>(
     section: &str,
 ) -> Result<()> {
     let mut done = 0;
-    let mut text: Vec<u8> = Vec::new();
-    let mut spans: Vec<(usize, usize, usize)> = Vec::new();
-    let mut parsed: Vec<Result<(ElementKind, [u32; 8])>> = Vec::new();
-    while done < n {
-        text.clear();
-        spans.clear();
-        let mut read_err = None;
-        while spans.len() < BATCH && done + spans.len() < n {
-            match rd.expect_line(cx.file, section) {
-                Ok((ln, line)) => {
-                    if is_skippable(line) {
-                        continue;
-                    }
-                    let a = text.len();
-                    text.extend_from_slice(line);
-                    spans.push((ln, a, text.len()));
-                }
-                Err(e) => {
-                    read_err = Some(e);
-                    break;
-                }
-            }
-        }
-        spans
-            .par_iter()
-            .map(|&(ln, a, b)| parse_element(cx, ln, &text[a..b], dim))
-            .collect_into_vec(&mut parsed);
-        for (r, &(ln, _, _)) in parsed.drain(..).zip(&spans) {
-            let (kind, nodes) = r?;
+    read_section(
+        cx,
+        rd,
+        n,
+        section,
+        |ln, line, _| parse_element(cx, ln, line, dim),
+        |(kind, nodes), ln| {
             let g = set.group_mut(kind);
             if g.nodes.capacity() == 0 {
                 reserve_capped(&mut g.nodes, (n - done).saturating_mul(kind.n_nodes()));
@@ -247,12 +323,8 @@ fn read_elements<R: BufRead>(
             }
             g.nodes.extend_from_slice(&nodes[..kind.n_nodes()]);
             done += 1;
-        }
-        if let Some(e) = read_err {
-            return Err(e);
-        }
-    }
-    Ok(())
+        },
+    )
 }
 
 /// Parses one point line of node `node`: `dim` finite coordinates, optionally the node's
@@ -287,10 +359,8 @@ fn parse_point(cx: &Ctx<'_>, ln: usize, line: &[u8], dim: u8, node: usize) -> Re
     Ok(p)
 }
 
-/// Reads `n` point lines into `coords`: lines read sequentially into a batch buffer and
-/// parsed in parallel, results applied in line order (the first error reported is that of a
-/// sequential read).
-fn read_points<R: BufRead>(
+/// Reads `n` point lines into `coords` ([`read_section`]).
+fn read_points<R: BufRead + Send>(
     cx: &Ctx<'_>,
     rd: &mut LineReader<R>,
     n: usize,
@@ -298,47 +368,18 @@ fn read_points<R: BufRead>(
     coords: &mut Vec<[f64; 3]>,
 ) -> Result<()> {
     reserve_capped(coords, n);
-    let mut done = 0;
-    let mut text: Vec<u8> = Vec::new();
-    let mut spans: Vec<(usize, usize, usize)> = Vec::new();
-    let mut parsed: Vec<Result<[f64; 3]>> = Vec::new();
-    while done < n {
-        text.clear();
-        spans.clear();
-        let mut read_err = None;
-        while spans.len() < BATCH && done + spans.len() < n {
-            match rd.expect_line(cx.file, "NPOIN") {
-                Ok((ln, line)) => {
-                    if is_skippable(line) {
-                        continue;
-                    }
-                    let a = text.len();
-                    text.extend_from_slice(line);
-                    spans.push((ln, a, text.len()));
-                }
-                Err(e) => {
-                    read_err = Some(e);
-                    break;
-                }
-            }
-        }
-        spans
-            .par_iter()
-            .enumerate()
-            .map(|(k, &(ln, a, b))| parse_point(cx, ln, &text[a..b], dim, done + k))
-            .collect_into_vec(&mut parsed);
-        for r in parsed.drain(..) {
-            coords.push(r?);
-            done += 1;
-        }
-        if let Some(e) = read_err {
-            return Err(e);
-        }
-    }
-    Ok(())
+    read_section(
+        cx,
+        rd,
+        n,
+        "NPOIN",
+        |ln, line, node| parse_point(cx, ln, line, dim, node),
+        |p, _| coords.push(p),
+    )
 }
 
-/// Reads an SU2 grid from `r`; `file` names the input in errors.
+/// Reads an SU2 grid from `r`; `file` names the input in errors (`Send`: the next batch of
+/// lines is read on one thread while the last one is parsed on the others).
 ///
 /// ```
 /// let txt = "NDIME= 2\nNELEM= 1\n5 0 1 2 0\nNPOIN= 3\n0 0 0\n1 0 1\n0 1 2\n\
@@ -347,7 +388,7 @@ fn read_points<R: BufRead>(
 /// assert_eq!((m.dim, m.n_nodes(), m.triangles().len()), (2, 3, 1));
 /// assert_eq!(m.markers[0].name, "wall");
 /// ```
-pub fn read<R: BufRead>(r: R, file: &Path) -> Result<Mesh> {
+pub fn read<R: BufRead + Send>(r: R, file: &Path) -> Result<Mesh> {
     let file = file.display().to_string();
     let cx = Ctx { file: &file };
     let mut rd = LineReader::new(r);

@@ -50,9 +50,9 @@ impl Default for AmgOptions {
 
 struct Level {
     /// Prolongator from the next coarser level.
-    p: Csr,
+    p: Transfer,
     /// Restriction Pᵀ.
-    r: Csr,
+    r: Transfer,
     /// Smoother weights ω / a_ii.
     wdiag: Vec<f64>,
 }
@@ -69,9 +69,9 @@ pub struct Amg<'a> {
     scratch: Mutex<Vec<Scratch>>,
 }
 
-/// Vectors of one level of the V-cycle: `b` and `out` are the level's right-hand side and
-/// result (empty on the finest level, where the caller's vectors are used), `x` the iterate
-/// (empty on the coarsest level). The residual is kept in `out`, which is free until the
+/// Vectors of one coarse level of the V-cycle (the finest level uses the caller's vectors):
+/// `b` and `out` are the level's right-hand side and result, `x` the iterate (empty on the
+/// coarsest level). The residual is kept in `out`, which is free until the
 /// last smoothing sweep writes the result there (no residual vector of its own).
 struct Scratch {
     b: Vec<V3>,
@@ -129,7 +129,13 @@ impl<'a> Amg<'a> {
             }
             let rho = gershgorin(cur);
             let omega = 4.0 / (3.0 * rho);
-            let p = smoothed_prolongator(cur, &agg, nagg, omega);
+            let mut p = smoothed_prolongator(cur, &agg, nagg, omega);
+            // The transfer operators are stored in single precision; the coarse matrix is the
+            // Galerkin product of the rounded P, so the V-cycle stays a symmetric positive
+            // definite preconditioner (A itself and every vector stay f64).
+            for v in &mut p.vals {
+                *v = f64::from(*v as f32);
+            }
             let t_p = t0.elapsed().as_secs_f64();
             let r = p.transpose();
             let t_r = t0.elapsed().as_secs_f64();
@@ -147,18 +153,22 @@ impl<'a> Amg<'a> {
                 );
             }
             let wdiag = cur.diag.iter().map(|d| omega / d).collect();
-            levels.push(Level { p, r, wdiag });
+            levels.push(Level {
+                p: Transfer::from(p),
+                r: Transfer::from(r),
+                wdiag,
+            });
             coarse.push(ac);
         }
         let last: &SymMatrix = coarse.last().unwrap_or(a);
         let chol = DenseCholesky::new(last, levels.len())?;
+        // Levels 1 … L (the finest level works in the caller's vectors).
         let mut scratch = Vec::new();
-        for l in 0..levels.len() {
-            let n = if l == 0 { a.n() } else { coarse[l - 1].n() };
-            let io = if l == 0 { 0 } else { n };
+        for c in coarse.iter().take(levels.len().saturating_sub(1)) {
+            let n = c.n();
             scratch.push(Scratch {
-                b: vec![[0.0; 3]; io],
-                out: vec![[0.0; 3]; io],
+                b: vec![[0.0; 3]; n],
+                out: vec![[0.0; 3]; n],
                 x: vec![[0.0; 3]; n],
             });
         }
@@ -244,16 +254,21 @@ impl<'a> Amg<'a> {
 
 impl Preconditioner for Amg<'_> {
     fn apply(&self, r: &[V3], z: &mut [V3]) {
-        let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        let (top, deeper) = guard
-            .split_first_mut()
-            .expect("the hierarchy has a scratch per level");
+        let mut own = Vec::new();
+        if !self.levels.is_empty() {
+            own = vec![[0.0; 3]; r.len()];
+        }
+        self.apply_with(r, z, &mut own);
+    }
+    /// The finest level's iterate is kept in `work` (no fine-level vector of its own).
+    fn apply_with(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) {
         if self.levels.is_empty() {
             // A single level: the dense factorisation is the preconditioner.
             self.chol.solve(r, z);
             return;
         }
-        self.vcycle(0, r, z, &mut top.x, deeper);
+        let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        self.vcycle(0, r, z, work, &mut guard);
     }
     fn name(&self) -> &'static str {
         "amg"
@@ -261,7 +276,7 @@ impl Preconditioner for Amg<'_> {
     fn bytes(&self) -> usize {
         let mut b = 0;
         for (l, lev) in self.levels.iter().enumerate() {
-            b += (lev.p.cols.len() + lev.r.cols.len()) * 12 + lev.wdiag.len() * 8;
+            b += lev.p.bytes() + lev.r.bytes() + lev.wdiag.len() * 8;
             if l > 0 {
                 b += self.coarse[l - 1].bytes();
             }
@@ -301,16 +316,41 @@ fn jacobi_sweep_into(a: &SymMatrix, w: &[f64], b: &[V3], x: &[V3], out: &mut [V3
     });
 }
 
-/// y ← M x for a general CSR matrix.
-fn spmv_csr(m: &Csr, x: &[V3], y: &mut [V3]) {
+/// A multigrid transfer operator (P or R = Pᵀ) in CSR form with single-precision values
+/// (half the memory and traffic of f64; products are formed in f64).
+struct Transfer {
+    offsets: Vec<usize>,
+    cols: Vec<u32>,
+    vals: Vec<f32>,
+}
+
+impl From<Csr> for Transfer {
+    fn from(m: Csr) -> Self {
+        Self {
+            vals: m.vals.iter().map(|&v| v as f32).collect(),
+            offsets: m.offsets,
+            cols: m.cols,
+        }
+    }
+}
+
+impl Transfer {
+    fn bytes(&self) -> usize {
+        self.offsets.len() * 8 + self.cols.len() * 4 + self.vals.len() * 4
+    }
+}
+
+/// y ← M x for a transfer operator.
+fn spmv_csr(m: &Transfer, x: &[V3], y: &mut [V3]) {
     y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
         let r0 = c * CHUNK;
         for (k, yi) in ys.iter_mut().enumerate() {
             let i = r0 + k;
             let mut s = [0.0; 3];
-            for p in m.offsets[i]..m.offsets[i + 1] {
-                let v = m.vals[p];
-                let xj = x[m.cols[p] as usize];
+            let span = m.offsets[i]..m.offsets[i + 1];
+            for (&col, &v) in m.cols[span.clone()].iter().zip(&m.vals[span]) {
+                let v = f64::from(v);
+                let xj = x[col as usize];
                 s[0] += v * xj[0];
                 s[1] += v * xj[1];
                 s[2] += v * xj[2];
@@ -321,14 +361,15 @@ fn spmv_csr(m: &Csr, x: &[V3], y: &mut [V3]) {
 }
 
 /// y ← y + M x.
-fn spmv_csr_add(m: &Csr, x: &[V3], y: &mut [V3]) {
+fn spmv_csr_add(m: &Transfer, x: &[V3], y: &mut [V3]) {
     y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
         let r0 = c * CHUNK;
         for (k, yi) in ys.iter_mut().enumerate() {
             let i = r0 + k;
-            for p in m.offsets[i]..m.offsets[i + 1] {
-                let v = m.vals[p];
-                let xj = x[m.cols[p] as usize];
+            let span = m.offsets[i]..m.offsets[i + 1];
+            for (&col, &v) in m.cols[span.clone()].iter().zip(&m.vals[span]) {
+                let v = f64::from(v);
+                let xj = x[col as usize];
                 yi[0] += v * xj[0];
                 yi[1] += v * xj[1];
                 yi[2] += v * xj[2];

@@ -66,6 +66,13 @@ impl Constraints {
 pub trait Preconditioner: Sync {
     /// z ← M⁻¹ r.
     fn apply(&self, r: &[V3], z: &mut [V3]);
+    /// z ← M⁻¹ r, with `work` (same length as r, contents ignored and overwritten) as
+    /// scratch the preconditioner may use instead of its own (the result is the same as
+    /// [`Preconditioner::apply`]'s). The default ignores it.
+    fn apply_with(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) {
+        let _ = work;
+        self.apply(r, z);
+    }
     /// Short name for reports.
     fn name(&self) -> &'static str;
     /// Bytes held.
@@ -176,11 +183,12 @@ pub fn pcg<P: Preconditioner + ?Sized>(
         return report(0, rr.sqrt() / scale, t0);
     }
     let mut z = vec![[0.0; 3]; n];
-    m.apply(&r, &mut z);
+    // q (A p) is dead while the preconditioner runs: it lends it as scratch.
+    let mut q = vec![[0.0; 3]; n];
+    m.apply_with(&r, &mut z, &mut q);
     cons.project(&mut z);
     let mut p = z.clone();
     let mut rz = dot(&r, &z);
-    let mut q = vec![[0.0; 3]; n];
     let mut it = 0;
     while it < opts.max_iters {
         it += 1;
@@ -195,7 +203,7 @@ pub fn pcg<P: Preconditioner + ?Sized>(
         if rr.sqrt() <= opts.rel_tol * scale {
             break;
         }
-        m.apply(&r, &mut z);
+        m.apply_with(&r, &mut z, &mut q);
         cons.project(&mut z);
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
