@@ -429,7 +429,9 @@ impl Csr {
     }
 }
 
-/// Sorts (column, value) pairs by column (stable) and sums duplicates in their order.
+/// Sorts (column, value) pairs by column (stable) and sums duplicates in their order (the
+/// reference of the multigrid prolongator's row merge, in tests).
+#[cfg(test)]
 pub(crate) fn merge_row(buf: &mut Vec<(u32, f64)>) {
     buf.sort_by_key(|e| e.0);
     let mut w = 0;
