@@ -53,8 +53,23 @@ struct Level {
     p: Transfer,
     /// Restriction Pᵀ.
     r: Transfer,
-    /// Smoother weights ω / a_ii.
-    wdiag: Vec<f64>,
+    /// Smoother damping ω (the weights ω / a_ii are formed when used: no stored vector).
+    omega: f64,
+}
+
+/// The damped-Jacobi weights ω / a_ii of one level, formed on use (the same division as a
+/// stored weight vector, bit for bit; one vector less to hold and to read).
+#[derive(Clone, Copy)]
+struct Weights<'a> {
+    omega: f64,
+    diag: &'a [f64],
+}
+
+impl Weights<'_> {
+    #[inline]
+    fn at(self, i: usize) -> f64 {
+        self.omega / self.diag[i]
+    }
 }
 
 /// A smoothed-aggregation multigrid hierarchy over a borrowed ([`Amg::new`]) or owned
@@ -152,11 +167,10 @@ impl<'a> Amg<'a> {
                     t0.elapsed().as_secs_f64() - t_r
                 );
             }
-            let wdiag = cur.diag.iter().map(|d| omega / d).collect();
             levels.push(Level {
                 p: Transfer::from(p),
                 r: Transfer::from(r),
-                wdiag,
+                omega,
             });
             coarse.push(ac);
         }
@@ -221,7 +235,10 @@ impl<'a> Amg<'a> {
         }
         let a = self.matrix(l);
         let lev = &self.levels[l];
-        let w = &lev.wdiag;
+        let w = Weights {
+            omega: lev.omega,
+            diag: &a.diag,
+        };
         // Pre-smoothing from x = 0: x = W b, then x += W (b − A x).
         x.par_chunks_mut(CHUNK)
             .zip(b.par_chunks(CHUNK))
@@ -229,7 +246,7 @@ impl<'a> Amg<'a> {
             .for_each(|(c, (xs, bs))| {
                 let r0 = c * CHUNK;
                 for (k, (xi, bi)) in xs.iter_mut().zip(bs).enumerate() {
-                    let wk = w[r0 + k];
+                    let wk = w.at(r0 + k);
                     *xi = [wk * bi[0], wk * bi[1], wk * bi[2]];
                 }
             });
@@ -276,7 +293,7 @@ impl Preconditioner for Amg<'_> {
     fn bytes(&self) -> usize {
         let mut b = 0;
         for (l, lev) in self.levels.iter().enumerate() {
-            b += lev.p.bytes() + lev.r.bytes() + lev.wdiag.len() * 8;
+            b += lev.p.bytes() + lev.r.bytes();
             if l > 0 {
                 b += self.coarse[l - 1].bytes();
             }
@@ -286,7 +303,7 @@ impl Preconditioner for Amg<'_> {
 }
 
 /// x ← x + W (b − A x); `r` is scratch.
-fn jacobi_sweep(a: &SymMatrix, w: &[f64], b: &[V3], x: &mut [V3], r: &mut [V3]) {
+fn jacobi_sweep(a: &SymMatrix, w: Weights, b: &[V3], x: &mut [V3], r: &mut [V3]) {
     a.residual(b, x, r);
     x.par_chunks_mut(CHUNK)
         .zip(r.par_chunks(CHUNK))
@@ -294,7 +311,7 @@ fn jacobi_sweep(a: &SymMatrix, w: &[f64], b: &[V3], x: &mut [V3], r: &mut [V3]) 
         .for_each(|(c, (xs, rs))| {
             let r0 = c * CHUNK;
             for (k, (xi, ri)) in xs.iter_mut().zip(rs).enumerate() {
-                let wk = w[r0 + k];
+                let wk = w.at(r0 + k);
                 for d in 0..3 {
                     xi[d] += wk * ri[d];
                 }
@@ -304,12 +321,12 @@ fn jacobi_sweep(a: &SymMatrix, w: &[f64], b: &[V3], x: &mut [V3], r: &mut [V3]) 
 
 /// out ← x + W (b − A x) (one Jacobi sweep written to another vector; the same arithmetic
 /// as [`jacobi_sweep`], row by row).
-fn jacobi_sweep_into(a: &SymMatrix, w: &[f64], b: &[V3], x: &[V3], out: &mut [V3]) {
+fn jacobi_sweep_into(a: &SymMatrix, w: Weights, b: &[V3], x: &[V3], out: &mut [V3]) {
     out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, os)| {
         let r0 = c * CHUNK;
         a.rows_mul(r0, r0 + os.len(), x, |i, v| {
             let ri = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
-            let wk = w[i];
+            let wk = w.at(i);
             let xi = x[i];
             os[i - r0] = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
         });
