@@ -1238,8 +1238,8 @@ pub fn spatial_order(coords: &[[f64; 3]]) -> Vec<u32> {
 /// [`deform`] calling `progress(phase, done, total)` as it goes.
 ///
 /// With `opts.renumber`, the grid is first renumbered internally along a Morton curve (so a
-/// randomly numbered input runs about as fast as a well-ordered one) and the unknowns are
-/// then ordered by reverse Cuthill–McKee; the result is returned in the input numbering.
+/// randomly numbered input runs about as fast as a well-ordered one) and the unknowns keep
+/// that order; the result is returned in the input numbering.
 pub fn deform_with_progress(
     mesh: &Mesh,
     bc: &BoundaryConditions,
@@ -1295,9 +1295,9 @@ fn deform_driver(
 
 /// A reusable deformation set-up: everything that depends only on the baseline grid and on
 /// the boundary-condition roles, built once by [`Deformer::new`] — node classification and
-/// sliding-plane fits, adjacency, the Morton renumbering and the reverse Cuthill–McKee order
-/// of the unknowns, the spring stiffnesses at the baseline geometry, the matrix A of Eq. 21
-/// and its preconditioner (multigrid hierarchy or Jacobi diagonal), the baseline quality.
+/// sliding-plane fits, adjacency, the Morton renumbering (also the unknowns' order), the
+/// spring stiffnesses at the baseline geometry, the matrix A of Eq. 21 and its
+/// preconditioner (multigrid hierarchy or Jacobi diagonal), the baseline quality.
 ///
 /// [`Deformer::deform`] then takes new values for the prescribed displacements (same nodes,
 /// same order as the set-up's [`BoundaryConditions::displacements`]) and reuses all of it for
