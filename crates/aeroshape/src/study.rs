@@ -120,12 +120,17 @@ pub struct Quality {
 
 impl Quality {
     fn of(q: &[f64]) -> Self {
-        let s = mesh::quality::summary(q);
+        deform::QualitySummary::of(q).into()
+    }
+}
+
+impl From<deform::QualitySummary> for Quality {
+    fn from(s: deform::QualitySummary) -> Self {
         Self {
             min: s.min,
             mean: s.mean,
             p1: s.p1,
-            inverted: s.n_nonpositive,
+            inverted: s.inverted,
             cells: s.measured,
         }
     }
@@ -276,7 +281,6 @@ pub struct Study {
     /// The surface-grid update's reusable part (factorised re-maps).
     surface_updater: surfgrid::Updater,
     wall: Vec<bool>,
-    wall_cells: WallCells,
     fixed_nodes: Vec<u32>,
     /// The volume deformation set-up (classification, ordering, baseline stiffness and
     /// multigrid hierarchy), built once; prescribed nodes: the wall nodes in index order, then
@@ -287,49 +291,6 @@ pub struct Study {
     quality: Vec<f64>,
     quality_before: Quality,
     setup: SetupReport,
-}
-
-/// The cells with a wall node (canonical index, kind, nodes).
-#[derive(Debug, Default)]
-struct WallCells {
-    index: Vec<u32>,
-    kind: Vec<ElementKind>,
-    start: Vec<usize>,
-    nodes: Vec<u32>,
-}
-
-impl WallCells {
-    fn new(grid: &Mesh, wall: &[bool]) -> Self {
-        let mut w = WallCells {
-            start: vec![0],
-            ..Default::default()
-        };
-        let mut k = 0u32;
-        for g in grid.cells.groups() {
-            for e in g.nodes.chunks_exact(g.kind.n_nodes()) {
-                if e.iter().any(|&v| wall[v as usize]) {
-                    w.index.push(k);
-                    w.kind.push(g.kind);
-                    w.nodes.extend_from_slice(e);
-                    w.start.push(w.nodes.len());
-                }
-                k += 1;
-            }
-        }
-        w
-    }
-
-    /// Recomputes in `q` the quality of the cells with a node flagged in `changed`.
-    fn refresh(&self, grid: &Mesh, changed: &[bool], q: &mut [f64]) {
-        let signed = grid.dim == 2;
-        for (c, &cell) in self.index.iter().enumerate() {
-            let e = &self.nodes[self.start[c]..self.start[c + 1]];
-            if e.iter().any(|&v| changed[v as usize]) {
-                q[cell as usize] =
-                    mesh::quality::element_quality(self.kind[c], e, &grid.coords, signed);
-            }
-        }
-    }
 }
 
 impl std::fmt::Debug for Study {
@@ -580,7 +541,6 @@ impl Study {
             path: grid_path.display().to_string(),
             message: format!("volume deformation set-up: {e}"),
         })?;
-        let wall_cells = WallCells::new(&grid, &wall);
         let setup = SetupReport {
             read,
             param: t_param,
@@ -601,7 +561,6 @@ impl Study {
             grid,
             surface_updater: surfgrid::Updater::new(&surface),
             surface,
-            wall_cells,
             wall,
             fixed_nodes,
             deformer,
@@ -752,18 +711,23 @@ impl Study {
         // 4. volume deformation
         progress("deform");
         let t = Instant::now();
-        // Prescribed values in the order of the set-up's boundary conditions (`deform_bc`):
-        // the wall nodes, then the nodes of `fixed` markers (held at zero).
-        let mut displacements = Vec::new();
+        // Prescribed positions in the order of the set-up's boundary conditions
+        // (`deform_bc`): the wall nodes at their new place on the geometry, then the nodes of
+        // `fixed` markers where they are.
+        let mut positions = Vec::with_capacity(self.deformer.n_displacements());
         let mut any = false;
         for (i, w) in self.wall.iter().enumerate() {
             if *w {
-                let d = surface.coords[i] - self.surface.coords[i];
-                any |= d.x != 0.0 || d.y != 0.0 || d.z != 0.0;
-                displacements.push([d.x, d.y, d.z]);
+                let (p, p0) = (surface.coords[i], self.surface.coords[i]);
+                any |= p != p0;
+                positions.push([p.x, p.y, p.z]);
             }
         }
-        displacements.resize(displacements.len() + self.fixed_nodes.len(), [0.0; 3]);
+        positions.extend(
+            self.fixed_nodes
+                .iter()
+                .map(|&v| self.grid.coords[v as usize]),
+        );
         let mut grid = self.grid.clone();
         let mut deformed_quality = None;
         let warm_start = self.case.deform.warm_start;
@@ -777,34 +741,18 @@ impl Study {
             } else {
                 None
             };
-            let d = self
+            // The wall nodes come back exactly at `positions`: the cell quality of the
+            // deformation is that of the returned grid.
+            let mut d = self
                 .deformer
-                .deform(&displacements, warm.as_deref())
+                .deform_to(&positions, warm.as_deref())
                 .map_err(phase("deform"))?;
-            grid.coords.clone_from(&d.coords);
-            let d = Arc::new(d);
-            if warm_start {
-                *self.last.lock().unwrap_or_else(PoisonError::into_inner) = Some(d.clone());
-            }
-            // Wall nodes exactly at their new position on the geometry (they differ from the
-            // deformation's x0 + d by round-off at most): the cells of a node that changed get
-            // their quality again.
-            let mut changed = vec![false; grid.n_nodes()];
-            for (i, w) in self.wall.iter().enumerate() {
-                if *w {
-                    let p = [
-                        surface.coords[i].x,
-                        surface.coords[i].y,
-                        surface.coords[i].z,
-                    ];
-                    changed[i] = grid.coords[i] != p;
-                    grid.coords[i] = p;
-                }
-            }
-            let mut q = d.cell_quality.clone();
-            self.wall_cells.refresh(&grid, &changed, &mut q);
-            deformed_quality = Some(q);
-            DeformPhase {
+            grid.coords = std::mem::take(&mut d.coords);
+            deformed_quality = Some((
+                std::mem::take(&mut d.cell_quality),
+                Quality::from(d.report.quality_after),
+            ));
+            let phase = DeformPhase {
                 seconds: t.elapsed().as_secs_f64(),
                 skipped: false,
                 iterations: d.report.iterations,
@@ -814,7 +762,12 @@ impl Study {
                 unknowns: d.report.unknowns,
                 sliding: d.report.sliding,
                 notes: d.report.notes.clone(),
+            };
+            if warm_start {
+                // Kept for its solver state only (coordinates and quality taken above).
+                *self.last.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::new(d));
             }
+            phase
         } else {
             // The solution is Δx = 0: the next evaluation starts cold.
             self.forget_warm_start();
@@ -841,7 +794,8 @@ impl Study {
                 }
             }
         }
-        let cell_quality = deformed_quality.unwrap_or_else(|| self.quality.clone());
+        let (cell_quality, quality_after) =
+            deformed_quality.unwrap_or_else(|| (self.quality.clone(), self.quality_before));
         let mut wall_support: f64 = 0.0;
         for (i, w) in self.wall.iter().enumerate() {
             if *w {
@@ -863,7 +817,7 @@ impl Study {
             deform: deform_phase,
             seconds: t_all.elapsed().as_secs_f64(),
             quality_before: self.quality_before,
-            quality_after: Quality::of(&cell_quality),
+            quality_after,
             wall_support_rel: wall_support,
         };
         Ok(Evaluation {

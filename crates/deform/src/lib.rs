@@ -27,7 +27,8 @@ pub mod support;
 pub use bc::{BoundaryConditions, MarkerRole, RigidMotion};
 pub use error::{Error, Result};
 pub use spring::{
-    DeformOptions, DeformReport, Deformed, Deformer, SolverKind, Stiffness, cell_quality, deform,
-    deform_on_supports, deform_on_supports_with_progress, deform_with_progress,
+    DeformOptions, DeformReport, Deformed, Deformer, QualitySummary, SolverKind, Stiffness,
+    cell_quality, deform, deform_on_supports, deform_on_supports_with_progress,
+    deform_with_progress,
 };
 pub use support::{Support, Supports};

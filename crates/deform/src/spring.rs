@@ -29,7 +29,7 @@ use serde::Serialize;
 
 use crate::bc::{BoundaryConditions, Classified, NodeRole, PlaneInfo, classify};
 use crate::error::{Error, Result};
-use crate::rotation::element_rotation;
+use crate::rotation::{frame, rotation_from_frame};
 use crate::solve::vecops::{CHUNK, V3, norm};
 use crate::solve::{
     Amg, AmgInfo, AmgOptions, Constraints, Jacobi, SolveOptions, SolveReport, SymMatrix, pcg,
@@ -620,25 +620,22 @@ fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> SymMatrix {
     }
 }
 
-/// b_k = Σ_{j prescribed} K_ij v(j) (+ `extra(i)`), for a per-node field v.
-fn rhs<G, F>(sys: &System, adj: &Adjacency, sp: &Springs, v: G, extra: F) -> Vec<V3>
+/// b_k = `extra(k, i)` + Σ_{j prescribed} K_ij v(j) for unknown k at node i, for a per-node
+/// field v (the springs to prescribed nodes from [`Couplings`]).
+fn rhs<G, F>(sys: &System, cp: &Couplings, v: G, extra: F) -> Vec<V3>
 where
     G: Fn(usize) -> V3 + Sync,
-    F: Fn(usize) -> V3 + Sync,
+    F: Fn(usize, usize) -> V3 + Sync,
 {
     (0..sys.node_of.len())
         .into_par_iter()
         .with_min_len(CHUNK)
         .map(|k| {
-            let i = sys.node_of[k] as usize;
-            let mut s = extra(i);
-            for &j in adj.neighbours(i) {
-                if sys.unk_of[j as usize] == u32::MAX {
-                    let kij = sp.k(i, j as usize);
-                    let vj = v(j as usize);
-                    for q in 0..3 {
-                        s[q] += kij * vj[q];
-                    }
+            let mut s = extra(k, sys.node_of[k] as usize);
+            for &(j, kij) in cp.row(k) {
+                let vj = v(j as usize);
+                for q in 0..3 {
+                    s[q] += kij * vj[q];
                 }
             }
             s
@@ -646,9 +643,64 @@ where
         .collect()
 }
 
-/// (R − I) d for the rotation of the unit quaternion (u, w): 2w (u×d) + 2 u×(u×d).
+/// The springs from each unknown to its prescribed neighbours (moving, fixed), rows in
+/// solver order: the coupling terms of the right-hand sides, evaluated once per grid state.
+/// The springs between unknowns are A's off-diagonal entries (a_ij = −K_ij).
+struct Couplings {
+    offsets: Vec<usize>,
+    /// (node j, K_ij).
+    entries: Vec<(u32, f64)>,
+}
+
+impl Couplings {
+    fn new(sys: &System, adj: &Adjacency, sp: &Springs) -> Self {
+        let nu = sys.node_of.len();
+        // Rows by chunks in parallel, concatenated in order; per chunk: the row lengths and
+        // the entries.
+        type Part = (Vec<usize>, Vec<(u32, f64)>);
+        let parts: Vec<Part> = (0..nu)
+            .into_par_iter()
+            .step_by(CHUNK)
+            .map(|lo| {
+                let mut lens = Vec::with_capacity(CHUNK);
+                let mut ent = Vec::new();
+                for k in lo..(lo + CHUNK).min(nu) {
+                    let i = sys.node_of[k] as usize;
+                    let before = ent.len();
+                    for &j in adj.neighbours(i) {
+                        if sys.unk_of[j as usize] == u32::MAX {
+                            ent.push((j, sp.k(i, j as usize)));
+                        }
+                    }
+                    lens.push(ent.len() - before);
+                }
+                (lens, ent)
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(nu + 1);
+        offsets.push(0);
+        let mut entries = Vec::with_capacity(parts.iter().map(|p| p.1.len()).sum());
+        for (lens, ent) in parts {
+            for l in lens {
+                offsets.push(offsets[offsets.len() - 1] + l);
+            }
+            entries.extend_from_slice(&ent);
+        }
+        Self { offsets, entries }
+    }
+
+    /// The prescribed neighbours of unknown `k` and their spring stiffness.
+    #[inline]
+    fn row(&self, k: usize) -> &[(u32, f64)] {
+        &self.entries[self.offsets[k]..self.offsets[k + 1]]
+    }
+}
+
+/// (R − I) d for the rotation of the quaternion (u, w) scaled by any l > 0, l² = |u|² + w²
+/// given: (2w (u×d) + 2 u×(u×d)) / l² — the unit quaternion's formula without the square
+/// root of its normalisation.
 #[inline]
-fn rot_minus_id(u: [f64; 3], w: f64, d: [f64; 3]) -> V3 {
+fn rot_minus_id(u: [f64; 3], w: f64, l2: f64, d: [f64; 3]) -> V3 {
     let c = |a: [f64; 3], b: [f64; 3]| {
         [
             a[1] * b[2] - a[2] * b[1],
@@ -658,10 +710,11 @@ fn rot_minus_id(u: [f64; 3], w: f64, d: [f64; 3]) -> V3 {
     };
     let ud = c(u, d);
     let uud = c(u, ud);
+    let f = 2.0 / l2;
     [
-        2.0 * (w * ud[0] + uud[0]),
-        2.0 * (w * ud[1] + uud[1]),
-        2.0 * (w * ud[2] + uud[2]),
+        f * (w * ud[0] + uud[0]),
+        f * (w * ud[1] + uud[1]),
+        f * (w * ud[2] + uud[2]),
     ]
 }
 
@@ -707,14 +760,17 @@ enum Pre<'a> {
     None,
 }
 
-/// The spring matrix of Eq. 21 on a grid state and its preconditioner (with the stiffness
-/// factors that depend on the state), built once per state.
+/// Everything of Eqs. 21 and 26 that depends only on the grid state an increment starts
+/// from, built once per state: the spring matrix, its preconditioner, the couplings to
+/// prescribed nodes and the skin elements' initial frames.
 struct Base {
     /// The matrix (None when the multigrid hierarchy owns it).
     a: Option<SymMatrix>,
     pre: Pre<'static>,
-    vol_factor: Vec<f64>,
-    wall_len: f64,
+    couplings: Couplings,
+    /// Per skin element: S̄⁻¹ of its initial frame (Eq. 25) and its size (the weight of its
+    /// rotation at its nodes); None for a degenerate element.
+    skin: Vec<Option<(Matrix3<f64>, f64)>>,
 }
 
 impl Base {
@@ -742,7 +798,21 @@ impl Base {
         let sp = springs(mesh, x, opts.stiffness, adj, &moving);
         tr("springs", &mut tt);
         let a = assemble(sys, adj, &sp);
+        let couplings = Couplings::new(sys, adj, &sp);
         tr("assemble", &mut tt);
+        let skin = if opts.adapt_rotation {
+            cls.skin
+                .par_iter()
+                .with_min_len(256)
+                .map(|e| {
+                    let p = skin_points(e, x);
+                    let p = &p[..e.len().min(3)];
+                    Some((frame(p)?.try_inverse()?, element_size(p)))
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         times.assemble += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let (a, pre) = match opts.solver {
@@ -760,8 +830,8 @@ impl Base {
         Ok(Self {
             a,
             pre,
-            vol_factor: sp.vol_factor.into_owned(),
-            wall_len: sp.wall_len,
+            couplings,
+            skin,
         })
     }
 
@@ -824,6 +894,7 @@ fn step(
     params: &mut [[f64; 2]],
     base: Option<&Base>,
     warm: Option<&SolverState>,
+    exact: Option<&[[f64; 3]]>,
 ) -> Result<StepOut> {
     let x0 = &mesh.coords;
     let n = cur.len();
@@ -836,7 +907,9 @@ fn step(
             NodeRole::Displaced(k) => {
                 let d = bc.displacements[k].1;
                 if s == 1.0 {
-                    [x0[i][0] + d[0], x0[i][1] + d[1], x0[i][2] + d[2]]
+                    exact.map_or([x0[i][0] + d[0], x0[i][1] + d[1], x0[i][2] + d[2]], |p| {
+                        p[k]
+                    })
                 } else {
                     [
                         x0[i][0] + s * d[0],
@@ -879,12 +952,6 @@ fn step(
             &owned
         }
     };
-    let sp = Springs {
-        x: cur,
-        kind: opts.stiffness,
-        vol_factor: base.vol_factor.as_slice().into(),
-        wall_len: base.wall_len,
-    };
     let a = base.matrix();
     let pre = &base.pre;
     if let Pre::Amg(m) = pre {
@@ -905,22 +972,24 @@ fn step(
         let rots: Vec<Option<([f64; 4], f64)>> = cls
             .skin
             .par_iter()
+            .zip(&base.skin)
             .with_min_len(256)
-            .map(|e| {
+            .map(|(e, f)| {
+                let (inv0, size) = (*f)?;
                 let k = e.len().min(3);
-                let (mut p0, mut p1) = ([[0.0; 3]; 3], [[0.0; 3]; 3]);
-                for (j, &v) in e.iter().take(k).enumerate() {
-                    p0[j] = cur_ro[v as usize];
-                    p1[j] = target[v as usize];
-                }
-                let r = element_rotation(&p0[..k], &p1[..k])?;
+                let (p0, p1) = (skin_points(e, cur_ro), skin_points(e, &target));
+                let r = if p0 == p1 {
+                    Matrix3::identity()
+                } else {
+                    rotation_from_frame(&inv0, &p1[..k])?
+                };
                 let mut q = quat(&r);
                 if mesh.dim == 2 {
                     // Plane grids rotate about z only (drop the round-off of the SVD).
                     let l = (q[2] * q[2] + q[3] * q[3]).sqrt();
                     q = [0.0, 0.0, q[2] / l, q[3] / l];
                 }
-                Some((q, element_size(&p0[..k])))
+                Some((q, size))
             })
             .collect();
         for (e, rot) in cls.skin.iter().zip(&rots) {
@@ -952,7 +1021,7 @@ fn step(
             // principle keeps |u| ≤ 1 up to the solver tolerance: clamped), so no second
             // solve is needed (see the module doc).
             drop((acc, touched));
-            let bv = rhs(sys, adj, &sp, |j| qv[j], |_| [0.0; 3]);
+            let bv = rhs(sys, &base.couplings, |j| qv[j], |_, _| [0.0; 3]);
             let nu = sys.node_of.len();
             // u = 0 (R = I) as the start, or the previous solution when warm.
             let mut xv = match warm {
@@ -986,34 +1055,40 @@ fn step(
         let (t, c) = (target[j], cur_ro[j]);
         [t[0] - c[0], t[1] - c[1], t[2] - c[2]]
     };
-    let b = rhs(sys, adj, &sp, disp, |i| {
-        if !any_rot {
+    // −Σ_j K_ij (R_ij − I)(x_j − x_i) over every neighbour j of node i: the unknown ones
+    // from A's row k (a_kl = −K_ij), then the prescribed ones.
+    let r_term = |i: usize, j: usize| {
+        let u = [
+            qv[i][0] + qv[j][0],
+            qv[i][1] + qv[j][1],
+            qv[i][2] + qv[j][2],
+        ];
+        let w = qw[i] + qw[j];
+        let l2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2] + w * w;
+        if l2 == 0.0 {
             return [0.0; 3];
         }
+        let d = [
+            cur_ro[j][0] - cur_ro[i][0],
+            cur_ro[j][1] - cur_ro[i][1],
+            cur_ro[j][2] - cur_ro[i][2],
+        ];
+        rot_minus_id(u, w, l2, d)
+    };
+    let b = rhs(sys, &base.couplings, disp, |k, i| {
         let mut s = [0.0; 3];
-        for &j in adj.neighbours(i) {
-            let j = j as usize;
-            let kij = sp.k(i, j);
-            let mut u = [
-                qv[i][0] + qv[j][0],
-                qv[i][1] + qv[j][1],
-                qv[i][2] + qv[j][2],
-            ];
-            let mut w = qw[i] + qw[j];
-            let l = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2] + w * w).sqrt();
-            if l == 0.0 {
-                continue;
+        if !any_rot {
+            return s;
+        }
+        let (cols, vals) = a.row(k);
+        for (&c, &akl) in cols.iter().zip(vals) {
+            let r = r_term(i, sys.node_of[c as usize] as usize);
+            for q in 0..3 {
+                s[q] += akl * r[q];
             }
-            for v in u.iter_mut() {
-                *v /= l;
-            }
-            w /= l;
-            let d = [
-                cur_ro[j][0] - cur_ro[i][0],
-                cur_ro[j][1] - cur_ro[i][1],
-                cur_ro[j][2] - cur_ro[i][2],
-            ];
-            let r = rot_minus_id(u, w, d);
+        }
+        for &(j, kij) in base.couplings.row(k) {
+            let r = r_term(i, j as usize);
             for q in 0..3 {
                 s[q] -= kij * r[q];
             }
@@ -1163,6 +1238,16 @@ fn step(
     Ok(out)
 }
 
+/// The (up to three) nodes of skin element `e` at coordinates `x` (unused slots zero).
+#[inline]
+fn skin_points(e: &[u32], x: &[[f64; 3]]) -> [[f64; 3]; 3] {
+    let mut p = [[0.0; 3]; 3];
+    for (q, &v) in p.iter_mut().zip(e) {
+        *q = x[v as usize];
+    }
+    p
+}
+
 fn element_size(p: &[[f64; 3]]) -> f64 {
     let v = |a: [f64; 3]| Vector3::from(a);
     if p.len() >= 3 {
@@ -1284,13 +1369,20 @@ fn deform_driver(
 ) -> Result<Deformed> {
     let d = Deformer::build(mesh, bc, sup, opts, progress)?;
     let values: Vec<[f64; 3]> = bc.displacements.iter().map(|e| e.1).collect();
-    let mut out = d.run(&values, None, progress)?;
+    let mut out = d.run(Prescribed::Displacements(&values), None, progress)?;
     let s = &mut out.report.seconds;
     s.setup += d.setup.setup;
     s.assemble += d.setup.assemble;
     s.precond += d.setup.precond;
     s.quality += d.setup.quality;
     Ok(out)
+}
+
+/// The prescribed values given to [`Deformer`]: displacements or new positions.
+#[derive(Clone, Copy)]
+enum Prescribed<'a> {
+    Displacements(&'a [[f64; 3]]),
+    Positions(&'a [[f64; 3]]),
 }
 
 /// A reusable deformation set-up: everything that depends only on the baseline grid and on
@@ -1459,7 +1551,28 @@ impl<'s> Deformer<'s> {
         displacements: &[[f64; 3]],
         warm_start: Option<&Deformed>,
     ) -> Result<Deformed> {
-        self.run(displacements, warm_start, &mut |_, _, _| {})
+        self.run(
+            Prescribed::Displacements(displacements),
+            warm_start,
+            &mut |_, _, _| {},
+        )
+    }
+
+    /// [`Deformer::deform`] with the prescribed nodes' new positions instead of their
+    /// displacements (same order): the displacements are `positions − x⁰`, and the returned
+    /// grid has these nodes exactly at `positions` (x⁰ + (p − x⁰) may differ from p by
+    /// round-off), so that its cell quality is that of a grid whose boundary is exactly the
+    /// caller's.
+    pub fn deform_to(
+        &self,
+        positions: &[[f64; 3]],
+        warm_start: Option<&Deformed>,
+    ) -> Result<Deformed> {
+        self.run(
+            Prescribed::Positions(positions),
+            warm_start,
+            &mut |_, _, _| {},
+        )
     }
 
     /// [`Deformer::deform`] calling `progress(phase, done, total)` as it goes.
@@ -1469,34 +1582,52 @@ impl<'s> Deformer<'s> {
         warm_start: Option<&Deformed>,
         progress: &mut dyn FnMut(&str, usize, usize),
     ) -> Result<Deformed> {
-        self.run(displacements, warm_start, progress)
+        self.run(
+            Prescribed::Displacements(displacements),
+            warm_start,
+            progress,
+        )
     }
 
     fn run(
         &self,
-        displacements: &[[f64; 3]],
+        values: Prescribed,
         warm_start: Option<&Deformed>,
         progress: &mut dyn FnMut(&str, usize, usize),
     ) -> Result<Deformed> {
-        if displacements.len() != self.bc.displacements.len() {
+        let (given, what) = match values {
+            Prescribed::Displacements(d) => (d, "displacement"),
+            Prescribed::Positions(p) => (p, "position"),
+        };
+        if given.len() != self.bc.displacements.len() {
             return Err(Error::BadMotion {
                 reason: format!(
-                    "{} displacements given; the deformation set-up has {} prescribed nodes",
-                    displacements.len(),
+                    "{} {what}s given; the deformation set-up has {} prescribed nodes",
+                    given.len(),
                     self.bc.displacements.len()
                 ),
             });
         }
         let mut bc = self.bc.clone();
-        for ((v, d), &new) in bc.displacements.iter_mut().zip(displacements) {
+        for ((v, d), &new) in bc.displacements.iter_mut().zip(given) {
             if !new.iter().all(|x| x.is_finite()) {
                 let v = self.perm.as_ref().map_or(*v, |_| self.inv[*v as usize]);
                 return Err(Error::BadMotion {
-                    reason: format!("node {v}: displacement {new:?} is not finite"),
+                    reason: format!("node {v}: {what} {new:?} is not finite"),
                 });
             }
-            *d = new;
+            *d = match values {
+                Prescribed::Displacements(_) => new,
+                Prescribed::Positions(_) => {
+                    let x0 = self.mesh.coords[*v as usize];
+                    [new[0] - x0[0], new[1] - x0[1], new[2] - x0[2]]
+                }
+            };
         }
+        let exact = match values {
+            Prescribed::Positions(p) => Some(p),
+            Prescribed::Displacements(_) => None,
+        };
         let shape = (self.mesh.n_nodes(), self.sys.node_of.len());
         let warm = match warm_start {
             Some(w) if w.state.shape != shape => {
@@ -1509,7 +1640,7 @@ impl<'s> Deformer<'s> {
             }
             w => w.map(|w| &w.state),
         };
-        let mut d = match self.run_inner(&bc, warm, progress) {
+        let mut d = match self.run_inner(&bc, warm, exact, progress) {
             Ok(d) => d,
             Err(Error::Support {
                 node: Some(v),
@@ -1538,6 +1669,7 @@ impl<'s> Deformer<'s> {
         &self,
         bc: &BoundaryConditions,
         warm: Option<&SolverState>,
+        exact: Option<&[[f64; 3]]>,
         progress: &mut dyn FnMut(&str, usize, usize),
     ) -> Result<Deformed> {
         let (mesh, cls, sys, adj, opts) = (&self.mesh, &self.cls, &self.sys, &self.adj, &self.opts);
@@ -1582,6 +1714,7 @@ impl<'s> Deformer<'s> {
                     // The first increment starts from the baseline: its A is the set-up's.
                     if m == 1 { self.base.as_ref() } else { None },
                     if inc == 1 { warm } else { None },
+                    exact,
                 )?;
                 slide_iterations += o.slide_iterations;
                 slide_update = slide_update.max(o.slide_update);

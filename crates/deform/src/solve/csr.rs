@@ -161,6 +161,13 @@ impl SymMatrix {
         self.diag.len() * 8 + self.offsets.len() * 8 + self.cols.len() * 4 + self.vals.len() * 8
     }
 
+    /// The off-diagonal entries of row `i`: their columns and values.
+    #[inline]
+    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let r = self.offsets[i]..self.offsets[i + 1];
+        (&self.cols[r.clone()], &self.vals[r])
+    }
+
     /// One row's product (a_ii x_i + Σ_j a_ij x_j) for the three components.
     #[inline]
     pub(crate) fn row_mul(&self, i: usize, x: &[V3]) -> V3 {

@@ -169,3 +169,52 @@ fn deformer_refuses_wrong_input() {
     let e = d.deform(&values(&b), Some(&other)).unwrap_err().to_string();
     assert!(e.contains("warm start"), "{e}");
 }
+
+#[test]
+fn deformer_to_positions_puts_the_prescribed_nodes_exactly_there() {
+    // The wing's leading column of nodes at x ≈ 0.005, the wing moved by −0.005 in x plus a
+    // small shear: positions computed apart from the displacements, as a caller's geometry
+    // would give them. Where p is much smaller than x⁰ (the leading column, now near x = 0),
+    // x⁰ + (p − x⁰) loses p's low bits and misses p.
+    let m = deform::generate::box_with_block(
+        [9, 6, 8],
+        [-0.9925, 0.0, 0.0],
+        [2.0, 1.2, 1.6],
+        [3, 0, 3],
+        [6, 3, 5],
+    );
+    let b = bc(&m, 0.0);
+    let d = Deformer::new(&m, &b, &DeformOptions::default()).unwrap();
+    let positions: Vec<[f64; 3]> = b
+        .displacements
+        .iter()
+        .map(|&(v, _)| {
+            let p = m.coords[v as usize];
+            [p[0] - 5e-3 + 1e-4 * (p[1] + 0.1), p[1], p[2] + 1e-3 * p[0]]
+        })
+        .collect();
+    let disp: Vec<[f64; 3]> = b
+        .displacements
+        .iter()
+        .zip(&positions)
+        .map(|(&(v, _), p)| {
+            let x0 = m.coords[v as usize];
+            [p[0] - x0[0], p[1] - x0[1], p[2] - x0[2]]
+        })
+        .collect();
+    let by_disp = d.deform(&disp, None).unwrap();
+    let to = d.deform_to(&positions, None).unwrap();
+    let mut inexact = 0;
+    for (&(v, _), p) in b.displacements.iter().zip(&positions) {
+        assert_eq!(to.coords[v as usize], *p, "node {v}");
+        inexact += usize::from(by_disp.coords[v as usize] != *p);
+    }
+    assert!(inexact > 0, "the test needs positions that x⁰ + d misses");
+    // The same solve (right-hand sides from p − x⁰ or (x⁰ + d) − x⁰, equal up to round-off),
+    // and the quality is that of the grid returned.
+    let err = testkit::max_coordinate_difference(&to.coords, &by_disp.coords);
+    assert!(err <= 1e-15, "{err:.3e}");
+    assert_eq!(to.cell_quality, deform::cell_quality(&m, &to.coords));
+    let e = d.deform_to(&positions[1..], None).unwrap_err().to_string();
+    assert!(e.contains("positions given"), "{e}");
+}
