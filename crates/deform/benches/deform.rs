@@ -336,8 +336,8 @@ fn figures() {
         mesh::generate::shuffle_nodes(&mut shuffled, 42);
         for (label, mm, renumber) in [
             ("ordered", &m, true),
-            ("random+RCM", &shuffled, true),
-            ("random, no RCM", &shuffled, false),
+            ("random, renumbered", &shuffled, true),
+            ("random, not renumbered", &shuffled, false),
         ] {
             if m.n_nodes() > 500_000 && !renumber {
                 continue;

@@ -2,8 +2,11 @@
 //! `MARKER_TAG` / `MARKER_ELEMS`. Trailing sections that SU2 tools append (periodic
 //! information, FFD boxes) are kept verbatim in [`Mesh::su2_extra`] and written back.
 //!
-//! The reader streams the input line by line through one reusable buffer; element codes are
-//! VTK cell types (3 line, 5 triangle, 9 quad, 10 tetra, 12 hexa, 13 prism, 14 pyramid).
+//! The reader streams the input line by line. The element and point sections are read in
+//! batches of lines (each batch parsed in parallel while the next one is read) and written in
+//! parallel blocks: the same grid, errors and bytes as a sequential reader and writer, for
+//! any thread count. Element codes are VTK cell types (3 line, 5 triangle, 9 quad, 10 tetra,
+//! 12 hexa, 13 prism, 14 pyramid).
 
 use std::io::{BufRead, Write};
 use std::path::Path;
@@ -196,10 +199,105 @@ fn count(cx: &Ctx<'_>, ln: usize, key: &str, val: &[u8]) -> Result<usize> {
 /// Lines per batch of the element reader.
 const BATCH: usize = 1 << 14;
 
-/// Reads `n` element lines into `set`. Lines are read sequentially into a batch buffer and
-/// parsed in parallel (rayon); results are applied in line order, so the grid and the first
-/// error reported are those of a sequential read.
-fn read_elements<R: BufRead>(
+/// One batch of lines of a section: their text, and per line (line number, start, end).
+#[derive(Default)]
+struct Batch {
+    text: Vec<u8>,
+    spans: Vec<(usize, usize, usize)>,
+    /// Index (within the section) of the batch's first item.
+    first: usize,
+    /// The read error that ended the batch early, if any.
+    err: Option<Error>,
+}
+
+impl Batch {
+    /// Reads the next lines of the section (items `first..`, at most [`BATCH`], fewer at the
+    /// section's end `n` or at a read error), skipping comments and blank lines.
+    fn fill<R: BufRead>(
+        &mut self,
+        rd: &mut LineReader<R>,
+        file: &str,
+        what: &str,
+        first: usize,
+        n: usize,
+    ) {
+        self.text.clear();
+        self.spans.clear();
+        self.first = first;
+        self.err = None;
+        while self.spans.len() < BATCH && first + self.spans.len() < n {
+            match rd.expect_line(file, what) {
+                Ok((ln, line)) => {
+                    if is_skippable(line) {
+                        continue;
+                    }
+                    let a = self.text.len();
+                    self.text.extend_from_slice(line);
+                    self.spans.push((ln, a, self.text.len()));
+                }
+                Err(e) => {
+                    self.err = Some(e);
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// Reads the `n` item lines of a section: lines are read sequentially by batches, each batch
+/// parsed in parallel (`parse(line number, text, item index)`) while the next batch is read
+/// (rayon::join), and the results applied in line order (`apply(item, line number)`), so the
+/// result and the first error reported are those of a sequential read.
+fn read_section<R, T, P, A>(
+    cx: &Ctx<'_>,
+    rd: &mut LineReader<R>,
+    n: usize,
+    what: &str,
+    parse: P,
+    mut apply: A,
+) -> Result<()>
+where
+    R: BufRead + Send,
+    T: Send,
+    P: Fn(usize, &[u8], usize) -> Result<T> + Sync,
+    A: FnMut(T, usize),
+{
+    let (mut cur, mut next) = (Batch::default(), Batch::default());
+    let mut parsed: Vec<Result<T>> = Vec::new();
+    cur.fill(rd, cx.file, what, 0, n);
+    loop {
+        let read = cur.first + cur.spans.len();
+        let more = cur.err.is_none() && read < n;
+        let parse_cur = |out: &mut Vec<Result<T>>| {
+            cur.spans
+                .par_iter()
+                .enumerate()
+                .map(|(k, &(ln, a, b))| parse(ln, &cur.text[a..b], cur.first + k))
+                .collect_into_vec(out);
+        };
+        if more {
+            rayon::join(
+                || next.fill(rd, cx.file, what, read, n),
+                || parse_cur(&mut parsed),
+            );
+        } else {
+            parse_cur(&mut parsed);
+        }
+        for (r, &(ln, _, _)) in parsed.drain(..).zip(&cur.spans) {
+            apply(r?, ln);
+        }
+        if let Some(e) = cur.err.take() {
+            return Err(e);
+        }
+        if !more {
+            return Ok(());
+        }
+        std::mem::swap(&mut cur, &mut next);
+    }
+}
+
+/// Reads `n` element lines into `set` ([`read_section`]).
+fn read_elements<R: BufRead + Send>(
     cx: &Ctx<'_>,
     rd: &mut LineReader<R>,
     n: usize,
@@ -209,35 +307,13 @@ fn read_elements<R: BufRead>(
     section: &str,
 ) -> Result<()> {
     let mut done = 0;
-    let mut text: Vec<u8> = Vec::new();
-    let mut spans: Vec<(usize, usize, usize)> = Vec::new();
-    let mut parsed: Vec<Result<(ElementKind, [u32; 8])>> = Vec::new();
-    while done < n {
-        text.clear();
-        spans.clear();
-        let mut read_err = None;
-        while spans.len() < BATCH && done + spans.len() < n {
-            match rd.expect_line(cx.file, section) {
-                Ok((ln, line)) => {
-                    if is_skippable(line) {
-                        continue;
-                    }
-                    let a = text.len();
-                    text.extend_from_slice(line);
-                    spans.push((ln, a, text.len()));
-                }
-                Err(e) => {
-                    read_err = Some(e);
-                    break;
-                }
-            }
-        }
-        spans
-            .par_iter()
-            .map(|&(ln, a, b)| parse_element(cx, ln, &text[a..b], dim))
-            .collect_into_vec(&mut parsed);
-        for (r, &(ln, _, _)) in parsed.drain(..).zip(&spans) {
-            let (kind, nodes) = r?;
+    read_section(
+        cx,
+        rd,
+        n,
+        section,
+        |ln, line, _| parse_element(cx, ln, line, dim),
+        |(kind, nodes), ln| {
             let g = set.group_mut(kind);
             if g.nodes.capacity() == 0 {
                 reserve_capped(&mut g.nodes, (n - done).saturating_mul(kind.n_nodes()));
@@ -247,15 +323,44 @@ fn read_elements<R: BufRead>(
             }
             g.nodes.extend_from_slice(&nodes[..kind.n_nodes()]);
             done += 1;
-        }
-        if let Some(e) = read_err {
-            return Err(e);
-        }
-    }
-    Ok(())
+        },
+    )
 }
 
-fn read_points<R: BufRead>(
+/// Parses one point line of node `node`: `dim` finite coordinates, optionally the node's
+/// index.
+fn parse_point(cx: &Ctx<'_>, ln: usize, line: &[u8], dim: u8, node: usize) -> Result<[f64; 3]> {
+    let mut tok = Tokens::new(line);
+    let mut p = [0.0; 3];
+    for (k, pk) in p.iter_mut().enumerate().take(dim as usize) {
+        let t = tok.next();
+        match t.and_then(parse_f64) {
+            Some(x) if x.is_finite() => *pk = x,
+            _ => {
+                let found = t.map_or("nothing".to_string(), |t| format!("'{}'", lossy(t)));
+                return Err(cx.err(
+                    ln,
+                    format!("node {node}: coordinate {k} must be a finite number, found {found}"),
+                ));
+            }
+        }
+    }
+    if let Some(t) = tok.next()
+        && (parse_u64(t).is_none() || tok.next().is_some())
+    {
+        return Err(cx.err(
+            ln,
+            format!(
+                "node {node}: unexpected token '{}' after {dim} coordinates",
+                lossy(t)
+            ),
+        ));
+    }
+    Ok(p)
+}
+
+/// Reads `n` point lines into `coords` ([`read_section`]).
+fn read_points<R: BufRead + Send>(
     cx: &Ctx<'_>,
     rd: &mut LineReader<R>,
     n: usize,
@@ -263,47 +368,18 @@ fn read_points<R: BufRead>(
     coords: &mut Vec<[f64; 3]>,
 ) -> Result<()> {
     reserve_capped(coords, n);
-    let mut done = 0;
-    while done < n {
-        let (ln, line) = rd.expect_line(cx.file, "NPOIN")?;
-        if is_skippable(line) {
-            continue;
-        }
-        let mut tok = Tokens::new(line);
-        let mut p = [0.0; 3];
-        for k in 0..dim as usize {
-            let t = tok.next();
-            match t.and_then(parse_f64) {
-                Some(x) if x.is_finite() => p[k] = x,
-                _ => {
-                    let found = t.map_or("nothing".to_string(), |t| format!("'{}'", lossy(t)));
-                    return Err(cx.err(
-                        ln,
-                        format!(
-                            "node {done}: coordinate {k} must be a finite number, found {found}"
-                        ),
-                    ));
-                }
-            }
-        }
-        if let Some(t) = tok.next()
-            && (parse_u64(t).is_none() || tok.next().is_some())
-        {
-            return Err(cx.err(
-                ln,
-                format!(
-                    "node {done}: unexpected token '{}' after {dim} coordinates",
-                    lossy(t)
-                ),
-            ));
-        }
-        coords.push(p);
-        done += 1;
-    }
-    Ok(())
+    read_section(
+        cx,
+        rd,
+        n,
+        "NPOIN",
+        |ln, line, node| parse_point(cx, ln, line, dim, node),
+        |p, _| coords.push(p),
+    )
 }
 
-/// Reads an SU2 grid from `r`; `file` names the input in errors.
+/// Reads an SU2 grid from `r`; `file` names the input in errors (`Send`: the next batch of
+/// lines is read on one thread while the last one is parsed on the others).
 ///
 /// ```
 /// let txt = "NDIME= 2\nNELEM= 1\n5 0 1 2 0\nNPOIN= 3\n0 0 0\n1 0 1\n0 1 2\n\
@@ -312,7 +388,7 @@ fn read_points<R: BufRead>(
 /// assert_eq!((m.dim, m.n_nodes(), m.triangles().len()), (2, 3, 1));
 /// assert_eq!(m.markers[0].name, "wall");
 /// ```
-pub fn read<R: BufRead>(r: R, file: &Path) -> Result<Mesh> {
+pub fn read<R: BufRead + Send>(r: R, file: &Path) -> Result<Mesh> {
     let file = file.display().to_string();
     let cx = Ctx { file: &file };
     let mut rd = LineReader::new(r);
@@ -482,9 +558,73 @@ pub fn read<R: BufRead>(r: R, file: &Path) -> Result<Mesh> {
     Ok(mesh)
 }
 
+/// Lines per block of the parallel writer (each block formatted by one task into its own
+/// buffer; the blocks are written in order, so the output does not depend on the thread
+/// count).
+const WRITE_BLOCK: usize = 8192;
+
+/// Blocks formatted at once before they are written (bounds the buffered text).
+const WRITE_BATCH: usize = 16;
+
+/// Formats `n` lines by `line(i, out)` in parallel blocks of [`WRITE_BLOCK`] lines and writes
+/// them to `w` in order.
+fn write_lines<W, F>(n: usize, w: &mut W, line: F) -> std::io::Result<()>
+where
+    W: Write + ?Sized,
+    F: Fn(usize, &mut Vec<u8>) + Sync,
+{
+    let blocks = n.div_ceil(WRITE_BLOCK);
+    let mut texts: Vec<Vec<u8>> = Vec::new();
+    for first in (0..blocks).step_by(WRITE_BATCH) {
+        let last = (first + WRITE_BATCH).min(blocks);
+        (first..last)
+            .into_par_iter()
+            .map(|b| {
+                let lo = b * WRITE_BLOCK;
+                let hi = (lo + WRITE_BLOCK).min(n);
+                let mut out = Vec::with_capacity((hi - lo) * 48);
+                for i in lo..hi {
+                    line(i, &mut out);
+                }
+                out
+            })
+            .collect_into_vec(&mut texts);
+        for t in &texts {
+            w.write_all(t)?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes the element lines of `set` (code, nodes, and with `ids` the element's index).
+fn write_elements<W: Write + ?Sized>(set: &Elements, ids: bool, w: &mut W) -> std::io::Result<()> {
+    let mut first_id = 0usize;
+    for g in set.groups() {
+        let nn = g.kind.n_nodes();
+        let code = u64::from(g.kind.vtk_code());
+        write_lines(g.len(), w, |e, b| {
+            push_u64(b, code);
+            for &v in &g.nodes[e * nn..(e + 1) * nn] {
+                b.push(b'\t');
+                push_u64(b, u64::from(v));
+            }
+            if ids {
+                b.push(b'\t');
+                push_u64(b, (first_id + e) as u64);
+            }
+            b.push(b'\n');
+        })?;
+        first_id += g.len();
+    }
+    Ok(())
+}
+
 /// Writes `mesh` in SU2 native ASCII. Coordinates are written in their shortest
 /// round-trip form, so reading back gives the same bits. Element ids follow the canonical
 /// kind order of [`Elements`]. [`Mesh::su2_extra`] is appended verbatim.
+///
+/// The lines are formatted in parallel by blocks and written in order (the same bytes for
+/// any thread count).
 ///
 /// A 2-D grid whose nodes do not all have z = 0 is refused (SU2 2-D files carry x and y
 /// only), rather than silently flattened.
@@ -500,57 +640,28 @@ pub fn write<W: Write + ?Sized>(mesh: &Mesh, w: &mut W) -> std::io::Result<()> {
             ),
         ));
     }
-    let mut b: Vec<u8> = Vec::with_capacity(1 << 16);
-    let flush = |b: &mut Vec<u8>, w: &mut W| -> std::io::Result<()> {
-        w.write_all(b)?;
-        b.clear();
-        Ok(())
-    };
+    let mut b: Vec<u8> = Vec::with_capacity(256);
     writeln!(b, "NDIME= {}", mesh.dim)?;
     writeln!(b, "NELEM= {}", mesh.cells.len())?;
-    for (id, (kind, nodes)) in mesh.cells.iter().enumerate() {
-        push_u64(&mut b, u64::from(kind.vtk_code()));
-        for &v in nodes {
-            b.push(b'\t');
-            push_u64(&mut b, u64::from(v));
-        }
-        b.push(b'\t');
-        push_u64(&mut b, id as u64);
-        b.push(b'\n');
-        if b.len() > 1 << 16 {
-            flush(&mut b, w)?;
-        }
-    }
-    writeln!(b, "NPOIN= {}", mesh.coords.len())?;
-    for (i, p) in mesh.coords.iter().enumerate() {
-        for x in &p[..mesh.dim as usize] {
-            push_f64(&mut b, *x);
+    w.write_all(&b)?;
+    write_elements(&mesh.cells, true, w)?;
+    writeln!(w, "NPOIN= {}", mesh.coords.len())?;
+    let dim = mesh.dim as usize;
+    write_lines(mesh.coords.len(), w, |i, b| {
+        for x in &mesh.coords[i][..dim] {
+            push_f64(b, *x);
             b.push(b'\t');
         }
-        push_u64(&mut b, i as u64);
+        push_u64(b, i as u64);
         b.push(b'\n');
-        if b.len() > 1 << 16 {
-            flush(&mut b, w)?;
-        }
-    }
-    writeln!(b, "NMARK= {}", mesh.markers.len())?;
+    })?;
+    writeln!(w, "NMARK= {}", mesh.markers.len())?;
     for m in &mesh.markers {
-        writeln!(b, "MARKER_TAG= {}", m.name)?;
-        writeln!(b, "MARKER_ELEMS= {}", m.elements.len())?;
-        for (kind, nodes) in m.elements.iter() {
-            push_u64(&mut b, u64::from(kind.vtk_code()));
-            for &v in nodes {
-                b.push(b'\t');
-                push_u64(&mut b, u64::from(v));
-            }
-            b.push(b'\n');
-            if b.len() > 1 << 16 {
-                flush(&mut b, w)?;
-            }
-        }
+        writeln!(w, "MARKER_TAG= {}", m.name)?;
+        writeln!(w, "MARKER_ELEMS= {}", m.elements.len())?;
+        write_elements(&m.elements, false, w)?;
     }
-    b.extend_from_slice(mesh.su2_extra.as_bytes());
-    flush(&mut b, w)
+    w.write_all(mesh.su2_extra.as_bytes())
 }
 
 #[cfg(test)]
@@ -567,5 +678,61 @@ mod tests {
         assert_eq!(scan_uints(b"5 1.0 2", &mut v), None);
         assert_eq!(scan_uints(b"5 12345678901 2", &mut v), None);
         assert_eq!(scan_uints(b"1 2 3 4 5 6 7 8 9 10 11", &mut v), None);
+    }
+
+    #[test]
+    fn parallel_write_and_read_span_several_blocks_and_batches() {
+        // 162 000 tetrahedra (more than WRITE_BLOCK × WRITE_BATCH lines), 29 791 points
+        // (more than one read batch), irrational coordinates.
+        let mut m = crate::generate::box_tets(30, 30, 30, [0.0; 3], [1.0, 0.7, 1.3]);
+        for (i, p) in m.coords.iter_mut().enumerate() {
+            p[0] += 1e-3 * (i as f64).sin();
+        }
+        assert!(m.cells.len() > WRITE_BLOCK * WRITE_BATCH && m.n_nodes() > BATCH);
+        let text = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let mut out = Vec::new();
+                    write(&m, &mut out).unwrap();
+                    out
+                })
+        };
+        let one = text(1);
+        assert_eq!(one, text(3));
+        // The same bytes as a line-by-line formatting of the element and point sections.
+        let mut seq = Vec::new();
+        for (id, (kind, nodes)) in m.cells.iter().enumerate() {
+            let ns: Vec<String> = nodes.iter().map(|v| v.to_string()).collect();
+            seq.extend_from_slice(
+                format!("{}\t{}\t{id}\n", kind.vtk_code(), ns.join("\t")).as_bytes(),
+            );
+        }
+        seq.extend_from_slice(format!("NPOIN= {}\n", m.n_nodes()).as_bytes());
+        for (i, p) in m.coords.iter().enumerate() {
+            seq.extend_from_slice(format!("{:?}\t{:?}\t{:?}\t{i}\n", p[0], p[1], p[2]).as_bytes());
+        }
+        let head = format!("NDIME= 3\nNELEM= {}\n", m.cells.len());
+        assert_eq!(&one[head.len()..head.len() + seq.len()], &seq[..]);
+        let back = read(&one[..], "t.su2".as_ref()).unwrap();
+        assert_eq!(back.coords, m.coords);
+        assert_eq!(back.cells, m.cells);
+        // An error in a later read batch names the node and line of a sequential read.
+        let mut bad = String::from_utf8(one).unwrap();
+        let target = format!("\t{}\n", 20_000);
+        let points = bad.find("NPOIN=").unwrap();
+        let at = points + bad[points..].find(&target).unwrap();
+        let line_start = bad[..at].rfind('\n').unwrap() + 1;
+        bad.replace_range(line_start..line_start + 1, "x");
+        let line_no = bad[..line_start].matches('\n').count() + 1;
+        let e = read(bad.as_bytes(), "t.su2".as_ref())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("line {line_no}")) && e.contains("node 20000"),
+            "{e}"
+        );
     }
 }

@@ -173,18 +173,32 @@ pub(crate) fn parse_f64(t: &[u8]) -> Option<f64> {
     }
 }
 
-/// Appends the decimal representation of `v`.
+/// The two-digit strings "00" … "99".
+const DIGIT_PAIRS: &[u8; 200] = b"\
+0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
+/// Appends the decimal representation of `v` (two digits per division).
 #[inline]
 pub(crate) fn push_u64(out: &mut Vec<u8>, mut v: u64) {
     let mut tmp = [0u8; 20];
     let mut i = tmp.len();
-    loop {
+    while v >= 100 {
+        let d = (v % 100) as usize * 2;
+        v /= 100;
+        i -= 2;
+        tmp[i..i + 2].copy_from_slice(&DIGIT_PAIRS[d..d + 2]);
+    }
+    if v >= 10 {
+        let d = v as usize * 2;
+        i -= 2;
+        tmp[i..i + 2].copy_from_slice(&DIGIT_PAIRS[d..d + 2]);
+    } else {
         i -= 1;
-        tmp[i] = b'0' + (v % 10) as u8;
-        v /= 10;
-        if v == 0 {
-            break;
-        }
+        tmp[i] = b'0' + v as u8;
     }
     out.extend_from_slice(&tmp[i..]);
 }
@@ -215,6 +229,26 @@ mod tests {
         push_u64(&mut v, 1203);
         push_u64(&mut v, 0);
         assert_eq!(v, b"-12030");
+        for x in [
+            0,
+            9,
+            10,
+            99,
+            100,
+            101,
+            999,
+            1000,
+            4_294_967_295,
+            10_000_000_000_000_000_000,
+            u64::MAX,
+        ]
+        .into_iter()
+        .chain((0..200_000).step_by(7))
+        {
+            let mut b = Vec::new();
+            push_u64(&mut b, x);
+            assert_eq!(b, x.to_string().as_bytes());
+        }
     }
 
     #[test]

@@ -50,11 +50,26 @@ impl Default for AmgOptions {
 
 struct Level {
     /// Prolongator from the next coarser level.
-    p: Csr,
+    p: Transfer,
     /// Restriction Pᵀ.
-    r: Csr,
-    /// Smoother weights ω / a_ii.
-    wdiag: Vec<f64>,
+    r: Transfer,
+    /// Smoother damping ω (the weights ω / a_ii are formed when used: no stored vector).
+    omega: f64,
+}
+
+/// The damped-Jacobi weights ω / a_ii of one level, formed on use (the same division as a
+/// stored weight vector, bit for bit; one vector less to hold and to read).
+#[derive(Clone, Copy)]
+struct Weights<'a> {
+    omega: f64,
+    diag: &'a [f64],
+}
+
+impl Weights<'_> {
+    #[inline]
+    fn at(self, i: usize) -> f64 {
+        self.omega / self.diag[i]
+    }
 }
 
 /// A smoothed-aggregation multigrid hierarchy over a borrowed ([`Amg::new`]) or owned
@@ -69,14 +84,14 @@ pub struct Amg<'a> {
     scratch: Mutex<Vec<Scratch>>,
 }
 
-/// Vectors of one level of the V-cycle: `b` and `out` are the level's right-hand side and
-/// result (empty on the finest level, where the caller's vectors are used), `x` the iterate
-/// and `r` the residual (empty on the coarsest level).
+/// Vectors of one coarse level of the V-cycle (the finest level uses the caller's vectors):
+/// `b` and `out` are the level's right-hand side and result, `x` the iterate (empty on the
+/// coarsest level). The residual is kept in `out`, which is free until the
+/// last smoothing sweep writes the result there (no residual vector of its own).
 struct Scratch {
     b: Vec<V3>,
     out: Vec<V3>,
     x: Vec<V3>,
-    r: Vec<V3>,
 }
 
 /// Summary of a hierarchy.
@@ -129,7 +144,13 @@ impl<'a> Amg<'a> {
             }
             let rho = gershgorin(cur);
             let omega = 4.0 / (3.0 * rho);
-            let p = smoothed_prolongator(cur, &agg, nagg, omega);
+            let mut p = smoothed_prolongator(cur, &agg, nagg, omega);
+            // The transfer operators are stored in single precision; the coarse matrix is the
+            // Galerkin product of the rounded P, so the V-cycle stays a symmetric positive
+            // definite preconditioner (A itself and every vector stay f64).
+            for v in &mut p.vals {
+                *v = f64::from(*v as f32);
+            }
             let t_p = t0.elapsed().as_secs_f64();
             let r = p.transpose();
             let t_r = t0.elapsed().as_secs_f64();
@@ -146,21 +167,23 @@ impl<'a> Amg<'a> {
                     t0.elapsed().as_secs_f64() - t_r
                 );
             }
-            let wdiag = cur.diag.iter().map(|d| omega / d).collect();
-            levels.push(Level { p, r, wdiag });
+            levels.push(Level {
+                p: Transfer::from(p),
+                r: Transfer::from(r),
+                omega,
+            });
             coarse.push(ac);
         }
         let last: &SymMatrix = coarse.last().unwrap_or(a);
         let chol = DenseCholesky::new(last, levels.len())?;
+        // Levels 1 … L (the finest level works in the caller's vectors).
         let mut scratch = Vec::new();
-        for l in 0..levels.len() {
-            let n = if l == 0 { a.n() } else { coarse[l - 1].n() };
-            let io = if l == 0 { 0 } else { n };
+        for c in coarse.iter().take(levels.len().saturating_sub(1)) {
+            let n = c.n();
             scratch.push(Scratch {
-                b: vec![[0.0; 3]; io],
-                out: vec![[0.0; 3]; io],
+                b: vec![[0.0; 3]; n],
+                out: vec![[0.0; 3]; n],
                 x: vec![[0.0; 3]; n],
-                r: vec![[0.0; 3]; n],
             });
         }
         let nc = last.n();
@@ -168,7 +191,6 @@ impl<'a> Amg<'a> {
             b: vec![[0.0; 3]; nc],
             out: vec![[0.0; 3]; nc],
             x: Vec::new(),
-            r: Vec::new(),
         });
         Ok(Self {
             fine,
@@ -204,24 +226,19 @@ impl<'a> Amg<'a> {
         }
     }
 
-    /// out ← V-cycle applied to `b` on level `l`; `x`, `r` are the level's work vectors and
-    /// `deeper` the scratch of the coarser levels.
-    fn vcycle(
-        &self,
-        l: usize,
-        b: &[V3],
-        out: &mut [V3],
-        x: &mut [V3],
-        r: &mut [V3],
-        deeper: &mut [Scratch],
-    ) {
+    /// out ← V-cycle applied to `b` on level `l`; `x` is the level's iterate, `out` holds
+    /// the residual until the last sweep, `deeper` is the scratch of the coarser levels.
+    fn vcycle(&self, l: usize, b: &[V3], out: &mut [V3], x: &mut [V3], deeper: &mut [Scratch]) {
         if l == self.levels.len() {
             self.chol.solve(b, out);
             return;
         }
         let a = self.matrix(l);
         let lev = &self.levels[l];
-        let w = &lev.wdiag;
+        let w = Weights {
+            omega: lev.omega,
+            diag: &a.diag,
+        };
         // Pre-smoothing from x = 0: x = W b, then x += W (b − A x).
         x.par_chunks_mut(CHUNK)
             .zip(b.par_chunks(CHUNK))
@@ -229,31 +246,24 @@ impl<'a> Amg<'a> {
             .for_each(|(c, (xs, bs))| {
                 let r0 = c * CHUNK;
                 for (k, (xi, bi)) in xs.iter_mut().zip(bs).enumerate() {
-                    let wk = w[r0 + k];
+                    let wk = w.at(r0 + k);
                     *xi = [wk * bi[0], wk * bi[1], wk * bi[2]];
                 }
             });
         for _ in 1..self.sweeps {
-            jacobi_sweep(a, w, b, x, r);
+            jacobi_sweep(a, w, b, x, out);
         }
-        // Restrict the residual, solve the coarse problem.
-        a.residual(b, x, r);
+        // Restrict the residual (in `out`), solve the coarse problem.
+        a.residual(b, x, out);
         let (next, rest) = deeper
             .split_first_mut()
             .expect("one scratch per level below the finest");
-        spmv_csr(&lev.r, r, &mut next.b);
-        self.vcycle(
-            l + 1,
-            &next.b,
-            &mut next.out,
-            &mut next.x,
-            &mut next.r,
-            rest,
-        );
+        spmv_csr(&lev.r, out, &mut next.b);
+        self.vcycle(l + 1, &next.b, &mut next.out, &mut next.x, rest);
         // Prolongate and correct; post-smoothing, the last sweep written straight to `out`.
         spmv_csr_add(&lev.p, &next.out, x);
         for _ in 1..self.sweeps {
-            jacobi_sweep(a, w, b, x, r);
+            jacobi_sweep(a, w, b, x, out);
         }
         jacobi_sweep_into(a, w, b, x, out);
     }
@@ -261,16 +271,21 @@ impl<'a> Amg<'a> {
 
 impl Preconditioner for Amg<'_> {
     fn apply(&self, r: &[V3], z: &mut [V3]) {
-        let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        let (top, deeper) = guard
-            .split_first_mut()
-            .expect("the hierarchy has a scratch per level");
+        let mut own = Vec::new();
+        if !self.levels.is_empty() {
+            own = vec![[0.0; 3]; r.len()];
+        }
+        self.apply_with(r, z, &mut own);
+    }
+    /// The finest level's iterate is kept in `work` (no fine-level vector of its own).
+    fn apply_with(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) {
         if self.levels.is_empty() {
             // A single level: the dense factorisation is the preconditioner.
             self.chol.solve(r, z);
             return;
         }
-        self.vcycle(0, r, z, &mut top.x, &mut top.r, deeper);
+        let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        self.vcycle(0, r, z, work, &mut guard);
     }
     fn name(&self) -> &'static str {
         "amg"
@@ -278,7 +293,7 @@ impl Preconditioner for Amg<'_> {
     fn bytes(&self) -> usize {
         let mut b = 0;
         for (l, lev) in self.levels.iter().enumerate() {
-            b += (lev.p.cols.len() + lev.r.cols.len()) * 12 + lev.wdiag.len() * 8;
+            b += lev.p.bytes() + lev.r.bytes();
             if l > 0 {
                 b += self.coarse[l - 1].bytes();
             }
@@ -288,7 +303,7 @@ impl Preconditioner for Amg<'_> {
 }
 
 /// x ← x + W (b − A x); `r` is scratch.
-fn jacobi_sweep(a: &SymMatrix, w: &[f64], b: &[V3], x: &mut [V3], r: &mut [V3]) {
+fn jacobi_sweep(a: &SymMatrix, w: Weights, b: &[V3], x: &mut [V3], r: &mut [V3]) {
     a.residual(b, x, r);
     x.par_chunks_mut(CHUNK)
         .zip(r.par_chunks(CHUNK))
@@ -296,7 +311,7 @@ fn jacobi_sweep(a: &SymMatrix, w: &[f64], b: &[V3], x: &mut [V3], r: &mut [V3]) 
         .for_each(|(c, (xs, rs))| {
             let r0 = c * CHUNK;
             for (k, (xi, ri)) in xs.iter_mut().zip(rs).enumerate() {
-                let wk = w[r0 + k];
+                let wk = w.at(r0 + k);
                 for d in 0..3 {
                     xi[d] += wk * ri[d];
                 }
@@ -306,30 +321,53 @@ fn jacobi_sweep(a: &SymMatrix, w: &[f64], b: &[V3], x: &mut [V3], r: &mut [V3]) 
 
 /// out ← x + W (b − A x) (one Jacobi sweep written to another vector; the same arithmetic
 /// as [`jacobi_sweep`], row by row).
-fn jacobi_sweep_into(a: &SymMatrix, w: &[f64], b: &[V3], x: &[V3], out: &mut [V3]) {
+fn jacobi_sweep_into(a: &SymMatrix, w: Weights, b: &[V3], x: &[V3], out: &mut [V3]) {
     out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, os)| {
         let r0 = c * CHUNK;
-        for (k, oi) in os.iter_mut().enumerate() {
-            let i = r0 + k;
-            let v = a.row_mul(i, x);
+        a.rows_mul(r0, r0 + os.len(), x, |i, v| {
             let ri = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
-            let wk = w[i];
+            let wk = w.at(i);
             let xi = x[i];
-            *oi = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
-        }
+            os[i - r0] = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
+        });
     });
 }
 
-/// y ← M x for a general CSR matrix.
-fn spmv_csr(m: &Csr, x: &[V3], y: &mut [V3]) {
+/// A multigrid transfer operator (P or R = Pᵀ) in CSR form with single-precision values
+/// (half the memory and traffic of f64; products are formed in f64).
+struct Transfer {
+    offsets: Vec<usize>,
+    cols: Vec<u32>,
+    vals: Vec<f32>,
+}
+
+impl From<Csr> for Transfer {
+    fn from(m: Csr) -> Self {
+        Self {
+            vals: m.vals.iter().map(|&v| v as f32).collect(),
+            offsets: m.offsets,
+            cols: m.cols,
+        }
+    }
+}
+
+impl Transfer {
+    fn bytes(&self) -> usize {
+        self.offsets.len() * 8 + self.cols.len() * 4 + self.vals.len() * 4
+    }
+}
+
+/// y ← M x for a transfer operator.
+fn spmv_csr(m: &Transfer, x: &[V3], y: &mut [V3]) {
     y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
         let r0 = c * CHUNK;
         for (k, yi) in ys.iter_mut().enumerate() {
             let i = r0 + k;
             let mut s = [0.0; 3];
-            for p in m.offsets[i]..m.offsets[i + 1] {
-                let v = m.vals[p];
-                let xj = x[m.cols[p] as usize];
+            let span = m.offsets[i]..m.offsets[i + 1];
+            for (&col, &v) in m.cols[span.clone()].iter().zip(&m.vals[span]) {
+                let v = f64::from(v);
+                let xj = x[col as usize];
                 s[0] += v * xj[0];
                 s[1] += v * xj[1];
                 s[2] += v * xj[2];
@@ -340,14 +378,15 @@ fn spmv_csr(m: &Csr, x: &[V3], y: &mut [V3]) {
 }
 
 /// y ← y + M x.
-fn spmv_csr_add(m: &Csr, x: &[V3], y: &mut [V3]) {
+fn spmv_csr_add(m: &Transfer, x: &[V3], y: &mut [V3]) {
     y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
         let r0 = c * CHUNK;
         for (k, yi) in ys.iter_mut().enumerate() {
             let i = r0 + k;
-            for p in m.offsets[i]..m.offsets[i + 1] {
-                let v = m.vals[p];
-                let xj = x[m.cols[p] as usize];
+            let span = m.offsets[i]..m.offsets[i + 1];
+            for (&col, &v) in m.cols[span.clone()].iter().zip(&m.vals[span]) {
+                let v = f64::from(v);
+                let xj = x[col as usize];
                 yi[0] += v * xj[0];
                 yi[1] += v * xj[1];
                 yi[2] += v * xj[2];
@@ -440,14 +479,23 @@ fn aggregate(a: &SymMatrix, theta: f64) -> (Vec<u32>, usize) {
 }
 
 /// P = (I − ω D⁻¹ A) P₀, P₀ the aggregate indicator.
+///
+/// A row of P has a few distinct aggregates (~4 on the finest level): each contribution is
+/// added to its aggregate's entry found by a linear search, in the row's order — the sums of
+/// a stable sort by column followed by merging (`merge_row`), bit for bit — and only the
+/// distinct entries are sorted.
 fn smoothed_prolongator(a: &SymMatrix, agg: &[u32], nagg: usize, omega: f64) -> Csr {
     Csr::from_rows(a.n(), nagg, |i, buf| {
-        buf.push((agg[i], 1.0 - omega));
+        let mut add = |c: u32, v: f64| match buf.iter_mut().find(|e| e.0 == c) {
+            Some(e) => e.1 += v,
+            None => buf.push((c, v)),
+        };
+        add(agg[i], 1.0 - omega);
         let s = omega / a.diag[i];
         for p in a.offsets[i]..a.offsets[i + 1] {
-            buf.push((agg[a.cols[p] as usize], -s * a.vals[p]));
+            add(agg[a.cols[p] as usize], -s * a.vals[p]);
         }
-        super::csr::merge_row(buf);
+        buf.sort_unstable_by_key(|e| e.0);
     })
 }
 
@@ -674,6 +722,39 @@ impl DenseCholesky {
                 s[d] /= l[i * n + i];
             }
             x[i] = s;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prolongator_rows_equal_sorted_merge_bit_for_bit() {
+        for (a, _) in [
+            crate::solve::tests::grid_system(12, 11, 10),
+            crate::solve::tests::grid_system(7, 9, 6),
+        ] {
+            let (agg, nagg) = aggregate(&a, 0.0);
+            let omega = 4.0 / (3.0 * gershgorin(&a));
+            let p = smoothed_prolongator(&a, &agg, nagg, omega);
+            let reference = Csr::from_rows(a.n(), nagg, |i, buf| {
+                buf.push((agg[i], 1.0 - omega));
+                let s = omega / a.diag[i];
+                for q in a.offsets[i]..a.offsets[i + 1] {
+                    buf.push((agg[a.cols[q] as usize], -s * a.vals[q]));
+                }
+                super::super::csr::merge_row(buf);
+            });
+            assert_eq!(p.offsets, reference.offsets);
+            assert_eq!(p.cols, reference.cols);
+            assert!(
+                p.vals
+                    .iter()
+                    .zip(&reference.vals)
+                    .all(|(x, y)| x.to_bits() == y.to_bits())
+            );
         }
     }
 }

@@ -66,6 +66,13 @@ impl Constraints {
 pub trait Preconditioner: Sync {
     /// z ← M⁻¹ r.
     fn apply(&self, r: &[V3], z: &mut [V3]);
+    /// z ← M⁻¹ r, with `work` (same length as r, contents ignored and overwritten) as
+    /// scratch the preconditioner may use instead of its own (the result is the same as
+    /// [`Preconditioner::apply`]'s). The default ignores it.
+    fn apply_with(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) {
+        let _ = work;
+        self.apply(r, z);
+    }
     /// Short name for reports.
     fn name(&self) -> &'static str;
     /// Bytes held.
@@ -154,11 +161,11 @@ pub fn pcg<P: Preconditioner + ?Sized>(
 ) -> SolveReport {
     let t0 = Instant::now();
     let n = a.n();
-    let bp = projected(b, cons);
+    let bp = ProjectedRhs::new(b, cons);
     cons.project(x);
-    let bnorm = norm(&bp);
+    let bnorm = bp.norm();
     let mut r = vec![[0.0; 3]; n];
-    let mut rr = a.residual(&bp, x, &mut r);
+    let mut rr = bp.residual(a, x, &mut r);
     cons.project(&mut r);
     if !cons.is_empty() {
         rr = dot(&r, &r);
@@ -176,11 +183,12 @@ pub fn pcg<P: Preconditioner + ?Sized>(
         return report(0, rr.sqrt() / scale, t0);
     }
     let mut z = vec![[0.0; 3]; n];
-    m.apply(&r, &mut z);
+    // q (A p) is dead while the preconditioner runs: it lends it as scratch.
+    let mut q = vec![[0.0; 3]; n];
+    m.apply_with(&r, &mut z, &mut q);
     cons.project(&mut z);
     let mut p = z.clone();
     let mut rz = dot(&r, &z);
-    let mut q = vec![[0.0; 3]; n];
     let mut it = 0;
     while it < opts.max_iters {
         it += 1;
@@ -195,7 +203,7 @@ pub fn pcg<P: Preconditioner + ?Sized>(
         if rr.sqrt() <= opts.rel_tol * scale {
             break;
         }
-        m.apply(&r, &mut z);
+        m.apply_with(&r, &mut z, &mut q);
         cons.project(&mut z);
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
@@ -204,19 +212,79 @@ pub fn pcg<P: Preconditioner + ?Sized>(
     }
     // True residual (in z's storage: not needed any more).
     let rtrue = &mut z;
-    a.residual(&bp, x, rtrue);
+    bp.residual(a, x, rtrue);
     cons.project(rtrue);
     report(it, norm(rtrue) / scale, t0)
 }
 
-/// `b` projected on the constraints (borrowed as it is when there is none: no copy).
-fn projected<'b>(b: &'b [V3], cons: &Constraints) -> std::borrow::Cow<'b, [V3]> {
-    if cons.is_empty() {
-        std::borrow::Cow::Borrowed(b)
-    } else {
-        let mut bp = b.to_vec();
-        cons.project(&mut bp);
-        std::borrow::Cow::Owned(bp)
+/// The right-hand side `b` projected on the constraints, without a projected copy of `b`:
+/// the constrained unknowns (stably sorted by index, so each unknown's constraints apply in
+/// the order of [`Constraints::items`], as [`Constraints::project`] does) are projected when
+/// they are read. Every result is bit for bit that of the same computation on a projected
+/// copy.
+struct ProjectedRhs<'b> {
+    b: &'b [V3],
+    items: Vec<(u32, Constraint)>,
+}
+
+impl<'b> ProjectedRhs<'b> {
+    fn new(b: &'b [V3], cons: &Constraints) -> Self {
+        let mut items = cons.items.clone();
+        items.sort_by_key(|e| e.0);
+        Self { b, items }
+    }
+
+    /// The projected b_i of the unknown `items[*t].0` (on entry), `t` moved past its items.
+    #[inline]
+    fn take(&self, t: &mut usize) -> V3 {
+        let i = self.items[*t].0;
+        let mut v = self.b[i as usize];
+        while *t < self.items.len() && self.items[*t].0 == i {
+            self.items[*t].1.project(&mut v);
+            *t += 1;
+        }
+        v
+    }
+
+    /// |P b| (the chunked sums of [`norm`]).
+    fn norm(&self) -> f64 {
+        if self.items.is_empty() {
+            return norm(self.b);
+        }
+        let parts: Vec<f64> = self
+            .b
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(c, cb)| {
+                let lo = c * CHUNK;
+                let mut t = self.items.partition_point(|e| (e.0 as usize) < lo);
+                let mut s = 0.0;
+                for (k, bk) in cb.iter().enumerate() {
+                    let v = if t < self.items.len() && self.items[t].0 as usize == lo + k {
+                        self.take(&mut t)
+                    } else {
+                        *bk
+                    };
+                    s += v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+                }
+                s
+            })
+            .collect();
+        ordered_sum(parts).sqrt()
+    }
+
+    /// r ← P b − A x; returns |r|² only without constraints (otherwise the caller projects r
+    /// and sums it again).
+    fn residual(&self, a: &SymMatrix, x: &[V3], r: &mut [V3]) -> f64 {
+        let rr = a.residual(self.b, x, r);
+        let mut t = 0;
+        while t < self.items.len() {
+            let i = self.items[t].0 as usize;
+            let bi = self.take(&mut t);
+            let v = a.row_mul(i, x);
+            r[i] = [bi[0] - v[0], bi[1] - v[1], bi[2] - v[2]];
+        }
+        rr
     }
 }
 
@@ -256,15 +324,15 @@ pub fn point_iteration(
 ) -> SolveReport {
     let t0 = Instant::now();
     let n = a.n();
-    let bp = projected(b, cons);
+    let bp = ProjectedRhs::new(b, cons);
     cons.project(x);
-    let bnorm = norm(&bp);
+    let bnorm = bp.norm();
     let scale = if bnorm > 0.0 { bnorm } else { 1.0 };
     let mut r = vec![[0.0; 3]; n];
     let mut it = 0;
     let mut rel = f64::INFINITY;
     while it < opts.max_iters {
-        a.residual(&bp, x, &mut r);
+        bp.residual(a, x, &mut r);
         cons.project(&mut r);
         rel = norm(&r) / scale;
         if rel <= opts.rel_tol {
@@ -285,7 +353,7 @@ pub fn point_iteration(
         let step = super::vecops::max_len(&r);
         axpy(1.0, &r, x);
         if step <= step_tol {
-            a.residual(&bp, x, &mut r);
+            bp.residual(a, x, &mut r);
             cons.project(&mut r);
             rel = norm(&r) / scale;
             break;
@@ -297,5 +365,46 @@ pub fn point_iteration(
         rel_residual: rel,
         converged: rel <= opts.rel_tol || it < opts.max_iters,
         seconds: t0.elapsed().as_secs_f64(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn projected_rhs_equals_a_projected_copy_bit_for_bit() {
+        let (a, b) = crate::solve::tests::grid_system(20, 19, 18); // 4896 unknowns: 2 chunks
+        assert!(a.n() > CHUNK);
+        let x: Vec<V3> = (0..a.n())
+            .map(|i| [(i as f64).sin(), 0.1 * i as f64, (0.3 * i as f64).cos()])
+            .collect();
+        let s = 0.5f64.sqrt();
+        // Unsorted, one unknown with two constraints, some in the second chunk.
+        let cons = Constraints {
+            items: vec![
+                (4100, Constraint::Plane([0.0, s, s])),
+                (7, Constraint::Plane([1.0, 0.0, 0.0])),
+                (4095, Constraint::Line([s, 0.0, s])),
+                (7, Constraint::Line([0.0, s, -s])),
+                (0, Constraint::Plane([0.0, 0.0, 1.0])),
+            ],
+        };
+        let mut bp = b.clone();
+        cons.project(&mut bp);
+        let rhs = ProjectedRhs::new(&b, &cons);
+        assert_eq!(rhs.norm().to_bits(), norm(&bp).to_bits());
+        let (mut r1, mut r2) = (vec![[0.0; 3]; a.n()], vec![[0.0; 3]; a.n()]);
+        rhs.residual(&a, &x, &mut r1);
+        a.residual(&bp, &x, &mut r2);
+        assert!(
+            r1.iter()
+                .flatten()
+                .zip(r2.iter().flatten())
+                .all(|(p, q)| p.to_bits() == q.to_bits())
+        );
+        // Without constraints: b itself.
+        let free = ProjectedRhs::new(&b, &Constraints::default());
+        assert_eq!(free.norm().to_bits(), norm(&b).to_bits());
     }
 }
