@@ -32,7 +32,7 @@ use crate::error::{Error, Result};
 use crate::rotation::{frame, rotation_from_frame};
 use crate::solve::vecops::{CHUNK, V3, norm};
 use crate::solve::{
-    Amg, AmgInfo, AmgOptions, Constraints, Jacobi, SolveOptions, SolveReport, SymMatrix, pcg,
+    Amg, AmgInfo, AmgOptions, Constraints, Csr, Jacobi, SolveOptions, SolveReport, SymMatrix, pcg,
     point_iteration,
 };
 use crate::support::{SupKind, Support, Supports, place, point, tangent_constraint};
@@ -345,7 +345,7 @@ struct Springs<'a> {
     kind: Stiffness,
     /// For [`Stiffness::Volume`]: V̄ / V_node per node; for [`Stiffness::WallDistance`]:
     /// the distance d_node to the moving boundary.
-    vol_factor: std::borrow::Cow<'a, [f64]>,
+    vol_factor: Vec<f64>,
     /// ℓ of [`Stiffness::WallDistance`].
     wall_len: f64,
 }
@@ -537,7 +537,7 @@ fn springs<'a>(
     Springs {
         x,
         kind,
-        vol_factor: vol_factor.into(),
+        vol_factor,
         wall_len,
     }
 }
@@ -621,8 +621,8 @@ fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> SymMatrix {
 }
 
 /// b_k = `extra(k, i)` + Σ_{j prescribed} K_ij v(j) for unknown k at node i, for a per-node
-/// field v (the springs to prescribed nodes from [`Couplings`]).
-fn rhs<G, F>(sys: &System, cp: &Couplings, v: G, extra: F) -> Vec<V3>
+/// field v (the springs to prescribed nodes from [`couplings`]).
+fn rhs<G, F>(sys: &System, cp: &Csr, v: G, extra: F) -> Vec<V3>
 where
     G: Fn(usize) -> V3 + Sync,
     F: Fn(usize, usize) -> V3 + Sync,
@@ -632,7 +632,8 @@ where
         .with_min_len(CHUNK)
         .map(|k| {
             let mut s = extra(k, sys.node_of[k] as usize);
-            for &(j, kij) in cp.row(k) {
+            let (nodes, kij) = cp.row(k);
+            for (&j, &kij) in nodes.iter().zip(kij) {
                 let vj = v(j as usize);
                 for q in 0..3 {
                     s[q] += kij * vj[q];
@@ -643,57 +644,19 @@ where
         .collect()
 }
 
-/// The springs from each unknown to its prescribed neighbours (moving, fixed), rows in
-/// solver order: the coupling terms of the right-hand sides, evaluated once per grid state.
-/// The springs between unknowns are A's off-diagonal entries (a_ij = −K_ij).
-struct Couplings {
-    offsets: Vec<usize>,
-    /// (node j, K_ij).
-    entries: Vec<(u32, f64)>,
-}
-
-impl Couplings {
-    fn new(sys: &System, adj: &Adjacency, sp: &Springs) -> Self {
-        let nu = sys.node_of.len();
-        // Rows by chunks in parallel, concatenated in order; per chunk: the row lengths and
-        // the entries.
-        type Part = (Vec<usize>, Vec<(u32, f64)>);
-        let parts: Vec<Part> = (0..nu)
-            .into_par_iter()
-            .step_by(CHUNK)
-            .map(|lo| {
-                let mut lens = Vec::with_capacity(CHUNK);
-                let mut ent = Vec::new();
-                for k in lo..(lo + CHUNK).min(nu) {
-                    let i = sys.node_of[k] as usize;
-                    let before = ent.len();
-                    for &j in adj.neighbours(i) {
-                        if sys.unk_of[j as usize] == u32::MAX {
-                            ent.push((j, sp.k(i, j as usize)));
-                        }
-                    }
-                    lens.push(ent.len() - before);
-                }
-                (lens, ent)
-            })
-            .collect();
-        let mut offsets = Vec::with_capacity(nu + 1);
-        offsets.push(0);
-        let mut entries = Vec::with_capacity(parts.iter().map(|p| p.1.len()).sum());
-        for (lens, ent) in parts {
-            for l in lens {
-                offsets.push(offsets[offsets.len() - 1] + l);
+/// The springs from each unknown to its prescribed neighbours (moving, fixed): row k (solver
+/// order) holds the nodes j and K_ij, the coupling terms of the right-hand sides, evaluated
+/// once per grid state. The springs between unknowns are A's off-diagonal entries
+/// (a_ij = −K_ij).
+fn couplings(sys: &System, adj: &Adjacency, sp: &Springs) -> Csr {
+    Csr::from_rows(sys.node_of.len(), sys.unk_of.len(), |k, row| {
+        let i = sys.node_of[k] as usize;
+        for &j in adj.neighbours(i) {
+            if sys.unk_of[j as usize] == u32::MAX {
+                row.push((j, sp.k(i, j as usize)));
             }
-            entries.extend_from_slice(&ent);
         }
-        Self { offsets, entries }
-    }
-
-    /// The prescribed neighbours of unknown `k` and their spring stiffness.
-    #[inline]
-    fn row(&self, k: usize) -> &[(u32, f64)] {
-        &self.entries[self.offsets[k]..self.offsets[k + 1]]
-    }
+    })
 }
 
 /// (R − I) d for the rotation of the quaternion (u, w) scaled by any l > 0, l² = |u|² + w²
@@ -767,7 +730,8 @@ struct Base {
     /// The matrix (None when the multigrid hierarchy owns it).
     a: Option<SymMatrix>,
     pre: Pre<'static>,
-    couplings: Couplings,
+    /// [`couplings`] at this state.
+    couplings: Csr,
     /// Per skin element: S̄⁻¹ of its initial frame (Eq. 25) and its size (the weight of its
     /// rotation at its nodes); None for a degenerate element.
     skin: Vec<Option<(Matrix3<f64>, f64)>>,
@@ -798,7 +762,7 @@ impl Base {
         let sp = springs(mesh, x, opts.stiffness, adj, &moving);
         tr("springs", &mut tt);
         let a = assemble(sys, adj, &sp);
-        let couplings = Couplings::new(sys, adj, &sp);
+        let couplings = couplings(sys, adj, &sp);
         tr("assemble", &mut tt);
         let skin = if opts.adapt_rotation {
             cls.skin
@@ -1087,7 +1051,8 @@ fn step(
                 s[q] += akl * r[q];
             }
         }
-        for &(j, kij) in base.couplings.row(k) {
+        let (nodes, kij) = base.couplings.row(k);
+        for (&j, &kij) in nodes.iter().zip(kij) {
             let r = r_term(i, j as usize);
             for q in 0..3 {
                 s[q] -= kij * r[q];
@@ -1595,9 +1560,10 @@ impl<'s> Deformer<'s> {
         warm_start: Option<&Deformed>,
         progress: &mut dyn FnMut(&str, usize, usize),
     ) -> Result<Deformed> {
-        let (given, what) = match values {
-            Prescribed::Displacements(d) => (d, "displacement"),
-            Prescribed::Positions(p) => (p, "position"),
+        // `exact`: the positions the prescribed nodes must end at, when given.
+        let (given, what, exact) = match values {
+            Prescribed::Displacements(d) => (d, "displacement", None),
+            Prescribed::Positions(p) => (p, "position", Some(p)),
         };
         if given.len() != self.bc.displacements.len() {
             return Err(Error::BadMotion {
@@ -1616,18 +1582,13 @@ impl<'s> Deformer<'s> {
                     reason: format!("node {v}: {what} {new:?} is not finite"),
                 });
             }
-            *d = match values {
-                Prescribed::Displacements(_) => new,
-                Prescribed::Positions(_) => {
-                    let x0 = self.mesh.coords[*v as usize];
-                    [new[0] - x0[0], new[1] - x0[1], new[2] - x0[2]]
-                }
+            *d = if exact.is_some() {
+                let x0 = self.mesh.coords[*v as usize];
+                [new[0] - x0[0], new[1] - x0[1], new[2] - x0[2]]
+            } else {
+                new
             };
         }
-        let exact = match values {
-            Prescribed::Positions(p) => Some(p),
-            Prescribed::Displacements(_) => None,
-        };
         let shape = (self.mesh.n_nodes(), self.sys.node_of.len());
         let warm = match warm_start {
             Some(w) if w.state.shape != shape => {

@@ -295,17 +295,14 @@ pub struct Summary {
 pub fn summary(q: &[f64]) -> Summary {
     let mut measured = 0;
     let (mut sum, mut n_nonpositive) = (0.0, 0);
-    let (mut min, mut max) = (f64::NAN, f64::NAN);
+    // Under `f64::total_cmp` (−0 < +0); used only when a value was measured.
+    let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
     for &x in q {
         if x.is_nan() {
             continue;
         }
-        if measured == 0 {
-            (min, max) = (x, x);
-        } else {
-            min = min.min_by_total(x);
-            max = max.max_by_total(x);
-        }
+        min = std::cmp::min_by(min, x, f64::total_cmp);
+        max = std::cmp::max_by(max, x, f64::total_cmp);
         measured += 1;
         sum += x;
         n_nonpositive += usize::from(x <= 0.0);
@@ -331,23 +328,6 @@ pub fn summary(q: &[f64]) -> Summary {
         p1: nth_smallest(q, rank, min, max),
         max,
         n_nonpositive,
-    }
-}
-
-/// `min`/`max` under `f64::total_cmp` (−0 < +0), as methods for the summary's loop.
-trait TotalOrder {
-    fn min_by_total(self, x: f64) -> f64;
-    fn max_by_total(self, x: f64) -> f64;
-}
-
-impl TotalOrder for f64 {
-    #[inline]
-    fn min_by_total(self, x: f64) -> f64 {
-        if x.total_cmp(&self).is_lt() { x } else { self }
-    }
-    #[inline]
-    fn max_by_total(self, x: f64) -> f64 {
-        if x.total_cmp(&self).is_gt() { x } else { self }
     }
 }
 

@@ -538,30 +538,6 @@ impl Acc {
     }
 }
 
-/// Concatenates per-block rows (row lengths, columns, values) into one CSR matrix.
-fn concat_blocks(nrows: usize, ncols: usize, blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)>) -> Csr {
-    let total: usize = blocks.iter().map(|b| b.1.len()).sum();
-    let mut offsets = Vec::with_capacity(nrows + 1);
-    offsets.push(0usize);
-    let mut cols = Vec::with_capacity(total);
-    let mut vals = Vec::with_capacity(total);
-    let mut last = 0;
-    for (lens, c, v) in blocks {
-        for l in lens {
-            last += l;
-            offsets.push(last);
-        }
-        cols.extend_from_slice(&c);
-        vals.extend_from_slice(&v);
-    }
-    Csr {
-        ncols,
-        offsets,
-        cols,
-        vals,
-    }
-}
-
 /// Coarse rows per task of the Galerkin product.
 const GALERKIN_ROWS: usize = 4096;
 
@@ -630,7 +606,7 @@ fn galerkin(a: &SymMatrix, p: &Csr, r: &Csr) -> SymMatrix {
             },
         )
         .collect();
-    let rap = concat_blocks(nc, nc, blocks);
+    let rap = Csr::from_blocks(nc, nc, blocks);
     // Split off the diagonal and symmetrise round-off: a_ij ← (a_ij + a_ji) / 2 is not
     // needed for CG's correctness, the product RAP is symmetric up to round-off only.
     let mut diag = vec![0.0; nc];

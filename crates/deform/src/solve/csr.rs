@@ -384,15 +384,25 @@ impl Csr {
                 (lens, cols, vals)
             })
             .collect();
-        let mut offsets = Vec::with_capacity(nrows + 1);
-        offsets.push(0);
+        Self::from_blocks(nrows, ncols, blocks)
+    }
+
+    /// Concatenates per-block rows (row lengths, columns, values), blocks in row order.
+    pub(crate) fn from_blocks(
+        nrows: usize,
+        ncols: usize,
+        blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)>,
+    ) -> Self {
         let total: usize = blocks.iter().map(|b| b.1.len()).sum();
+        let mut offsets = Vec::with_capacity(nrows + 1);
+        offsets.push(0usize);
         let mut cols = Vec::with_capacity(total);
         let mut vals = Vec::with_capacity(total);
+        let mut last = 0;
         for (lens, c, v) in blocks {
             for l in lens {
-                let last = *offsets.last().unwrap_or(&0);
-                offsets.push(last + l);
+                last += l;
+                offsets.push(last);
             }
             cols.extend_from_slice(&c);
             vals.extend_from_slice(&v);
@@ -403,6 +413,13 @@ impl Csr {
             cols,
             vals,
         }
+    }
+
+    /// The entries of row `i`: their columns and values.
+    #[inline]
+    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let r = self.offsets[i]..self.offsets[i + 1];
+        (&self.cols[r.clone()], &self.vals[r])
     }
 
     /// The transpose (sequential counting sort: deterministic).
