@@ -262,11 +262,7 @@ mod tests {
         for (i, w) in want.iter().enumerate() {
             assert_eq!(a.neighbours(i), &w[..], "node {i}");
         }
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap()
-            .install(|| Adjacency::from_elements(n, &cells));
+        let one = testkit::with_threads(1, || Adjacency::from_elements(n, &cells));
         assert_eq!(one, a);
     }
 

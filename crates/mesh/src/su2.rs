@@ -690,15 +690,11 @@ mod tests {
         }
         assert!(m.cells.len() > WRITE_BLOCK * WRITE_BATCH && m.n_nodes() > BATCH);
         let text = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let mut out = Vec::new();
-                    write(&m, &mut out).unwrap();
-                    out
-                })
+            testkit::with_threads(threads, || {
+                let mut out = Vec::new();
+                write(&m, &mut out).unwrap();
+                out
+            })
         };
         let one = text(1);
         assert_eq!(one, text(3));

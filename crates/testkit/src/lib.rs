@@ -54,6 +54,19 @@ pub fn check_close(a: &[f64], b: &[f64], rel: f64, abs: f64) -> Result<(), Strin
     Ok(())
 }
 
+/// Runs `f` on a rayon pool of `threads` threads (the thread-count independence tests).
+///
+/// ```
+/// assert_eq!(testkit::with_threads(3, rayon::current_num_threads), 3);
+/// ```
+pub fn with_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a rayon thread pool")
+        .install(f)
+}
+
 /// Largest difference of one coordinate between two point sets of the same numbering
 /// (max over points and components of |p_k − q_k|).
 pub fn max_coordinate_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {

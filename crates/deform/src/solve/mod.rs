@@ -253,23 +253,19 @@ mod tests {
     fn results_identical_for_any_thread_count() {
         let (a, b) = grid_system(24, 20, 18);
         let run = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
-                    let mut x = vec![[0.0; 3]; a.n()];
-                    let rep = pcg(
-                        &a,
-                        &b,
-                        &mut x,
-                        &amg,
-                        &Constraints::default(),
-                        &SolveOptions::default(),
-                    );
-                    (flat(&x), rep.iterations)
-                })
+            testkit::with_threads(threads, || {
+                let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+                let mut x = vec![[0.0; 3]; a.n()];
+                let rep = pcg(
+                    &a,
+                    &b,
+                    &mut x,
+                    &amg,
+                    &Constraints::default(),
+                    &SolveOptions::default(),
+                );
+                (flat(&x), rep.iterations)
+            })
         };
         let (x1, i1) = run(1);
         let (x3, i3) = run(3);

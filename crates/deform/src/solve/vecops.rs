@@ -96,16 +96,8 @@ mod tests {
             })
             .collect();
         let b: Vec<V3> = a.iter().map(|v| [v[2], v[0], v[1] * 1e-3]).collect();
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap()
-            .install(|| dot(&a, &b));
-        let three = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap()
-            .install(|| dot(&a, &b));
+        let one = testkit::with_threads(1, || dot(&a, &b));
+        let three = testkit::with_threads(3, || dot(&a, &b));
         assert_eq!(one.to_bits(), three.to_bits());
         // Same as a sequential chunked sum.
         let mut total = 0.0;

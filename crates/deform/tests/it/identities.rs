@@ -228,21 +228,17 @@ fn result_independent_of_thread_count_and_node_order() {
         displacements: vec![],
     };
     let run = |t: usize, renumber: bool| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build()
+        testkit::with_threads(t, || {
+            deform(
+                &m,
+                &bc,
+                &DeformOptions {
+                    renumber,
+                    ..Default::default()
+                },
+            )
             .unwrap()
-            .install(|| {
-                deform(
-                    &m,
-                    &bc,
-                    &DeformOptions {
-                        renumber,
-                        ..Default::default()
-                    },
-                )
-                .unwrap()
-            })
+        })
     };
     let a = run(1, true);
     let b = run(3, true);

@@ -131,14 +131,10 @@ fn deformer_independent_of_thread_count() {
     let m = grid();
     let b = bc(&m, 1.0);
     let run = |t: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build()
-            .unwrap()
-            .install(|| {
-                let d = Deformer::new(&m, &b, &DeformOptions::default()).unwrap();
-                d.deform(&values(&b), None).unwrap().coords
-            })
+        testkit::with_threads(t, || {
+            let d = Deformer::new(&m, &b, &DeformOptions::default()).unwrap();
+            d.deform(&values(&b), None).unwrap().coords
+        })
     };
     assert_eq!(run(1), run(3));
 }

@@ -261,11 +261,7 @@ fn update_is_thread_count_independent() {
     let nodes = move_surface_nodes(&db, 0, |p| Point3::new(p.x, p.y * 1.03, p.z * 1.02));
     let opts = UpdateOptions::default();
     let (a, ra) = update_model(&db, &nodes, &opts).unwrap();
-    let (b, rb) = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap()
-        .install(|| update_model(&db, &nodes, &opts).unwrap());
+    let (b, rb) = testkit::with_threads(1, || update_model(&db, &nodes, &opts).unwrap());
     assert_eq!(a.to_ron_string(), b.to_ron_string());
     assert_eq!(ra, rb);
 }

@@ -139,11 +139,7 @@ fn batch_equals_single_and_is_thread_independent() {
         .filter(|p| (p.x * p.x + p.y * p.y).sqrt() > 0.5)
         .collect();
     let many = proj.project_all(&pts).unwrap();
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap()
-        .install(|| proj.project_all(&pts).unwrap());
+    let one = testkit::with_threads(1, || proj.project_all(&pts).unwrap());
     assert_eq!(many, one);
     for (p, f) in pts.iter().zip(&many).step_by(50) {
         assert_eq!(*f, proj.project(p).unwrap());

@@ -35,16 +35,8 @@ fn adjacency_matches_brute_force_on_shuffled_box() {
 #[test]
 fn adjacency_is_independent_of_thread_count() {
     let m = generate::box_tets(6, 5, 4, [0.0; 3], [1.0; 3]);
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    let a1 = one.install(|| Adjacency::build(&m));
-    let four = rayon::ThreadPoolBuilder::new()
-        .num_threads(4)
-        .build()
-        .unwrap();
-    let a4 = four.install(|| Adjacency::build(&m));
+    let a1 = testkit::with_threads(1, || Adjacency::build(&m));
+    let a4 = testkit::with_threads(4, || Adjacency::build(&m));
     assert_eq!(a1, a4);
 }
 

@@ -195,15 +195,7 @@ fn quality_is_independent_of_thread_count() {
     for (i, p) in m.coords.iter_mut().enumerate() {
         p[0] += 0.01 * ((i * 7919) % 13) as f64 / 13.0;
     }
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    let three = rayon::ThreadPoolBuilder::new()
-        .num_threads(3)
-        .build()
-        .unwrap();
-    let q1 = one.install(|| quality::cell_quality(&m));
-    let q3 = three.install(|| quality::cell_quality(&m));
+    let q1 = testkit::with_threads(1, || quality::cell_quality(&m));
+    let q3 = testkit::with_threads(3, || quality::cell_quality(&m));
     assert!(q1.iter().zip(&q3).all(|(a, b)| a.to_bits() == b.to_bits()));
 }

@@ -108,11 +108,9 @@ fn cylinder_side_across_its_seam() {
 fn generation_does_not_depend_on_the_thread_count() {
     let db = fixture("sphere");
     let field = SizeField::uniform(0.3).unwrap();
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    let a = one.install(|| generate(&db, &field, &GenerateOptions::default()).unwrap());
+    let a = testkit::with_threads(1, || {
+        generate(&db, &field, &GenerateOptions::default()).unwrap()
+    });
     let b = generate(&db, &field, &GenerateOptions::default()).unwrap();
     assert!(a == b);
 }
