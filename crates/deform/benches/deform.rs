@@ -5,14 +5,16 @@
 //!
 //! `cargo bench -p deform --bench deform` runs the criterion groups on the 50k grid and, first,
 //! prints a table of figures for the sizes in `DEFORM_BENCH_SIZES` (cubes per side, default
-//! "46,84" for ~50k and ~300k nodes; add 126 for ~1M nodes).
+//! "46,84" for ~50k and ~300k nodes; add 126 for ~1M nodes). The linear systems are solved
+//! with the unknowns in `deform`'s internal order; `DEFORM_BENCH_ORDERS` also prints the
+//! SpMV with the unknowns in other orders (generator, Morton, Morton + RCM).
 
 use std::hint::black_box;
 use std::time::Instant;
 
 use criterion::{Criterion, Throughput};
 use deform::solve::vecops::V3;
-use deform::solve::{Amg, AmgOptions, Constraints, Jacobi, SolveOptions, SymMatrix, pcg};
+use deform::solve::{Amg, AmgOptions, Constraints, Entry, Jacobi, SolveOptions, SymMatrix, pcg};
 use deform::{BoundaryConditions, DeformOptions, MarkerRole, SolverKind, deform};
 use mesh::Mesh;
 use rayon::prelude::*;
@@ -77,11 +79,11 @@ fn triad_gbs(len: usize) -> f64 {
 }
 
 /// Bytes one SpMV moves at least: matrix (values, columns, offsets, diagonal), x once, y.
-fn spmv_bytes(a: &SymMatrix) -> f64 {
-    (a.nnz_offdiag() * 12 + a.n() * (8 + 8 + 24 + 24)) as f64
+fn spmv_bytes<T: Entry>(a: &SymMatrix<T>) -> f64 {
+    (a.nnz_offdiag() * (4 + std::mem::size_of::<T>()) + a.n() * (8 + 8 + 24 + 24)) as f64
 }
 
-fn spmv_gbs(a: &SymMatrix) -> f64 {
+fn spmv_gbs<T: Entry>(a: &SymMatrix<T>) -> f64 {
     let x: Vec<V3> = (0..a.n()).map(|i| [i as f64, 1.0, -1.0]).collect();
     let mut y = vec![[0.0; 3]; a.n()];
     let mut best = f64::INFINITY;
@@ -96,8 +98,9 @@ fn spmv_gbs(a: &SymMatrix) -> f64 {
 
 /// The assembled Eq. 21 system of the case (matrix in solver order and right-hand side), via
 /// a deformation with an iteration limit of 0 is not possible, so rebuild it here: the spring
-/// matrix with K = 1/l² on interior + sliding nodes, RHS from the rigid motion of the wing.
-fn system(m: &Mesh, bc: &BoundaryConditions) -> (SymMatrix, Vec<V3>) {
+/// matrix with K = 1/l² (rounded to f32, as the library stores it) on interior + sliding
+/// nodes, RHS from the rigid motion of the wing.
+fn system(m: &Mesh, bc: &BoundaryConditions) -> (SymMatrix<f32>, Vec<V3>) {
     // Use the library's own path: deform with the point iteration limited to 0 iterations
     // would error; instead assemble a plain Laplacian system with the same pattern.
     let adj = mesh::Adjacency::build(m);
@@ -142,11 +145,11 @@ fn system(m: &Mesh, bc: &BoundaryConditions) -> (SymMatrix, Vec<V3>) {
         for &j in adj.neighbours(i) {
             let j = j as usize;
             let l2: f64 = (0..3).map(|k| (x[j][k] - x[i][k]).powi(2)).sum();
-            let k = 1.0 / l2;
+            let k = f64::from((1.0 / l2) as f32);
             d += k;
             if num[j] != u32::MAX {
                 cols.push(num[j]);
-                vals.push(-k);
+                vals.push(-k as f32);
             } else if on[j] == 2 {
                 let t = motion.apply(x[j], 1.0);
                 for q in 0..3 {
@@ -167,6 +170,77 @@ fn system(m: &Mesh, bc: &BoundaryConditions) -> (SymMatrix, Vec<V3>) {
         },
         b,
     )
+}
+
+/// The SpMV of the benchmark system with its unknowns in other orders (the unknowns sorted
+/// by their node's index under a node numbering): the generator's, the Morton curve's, the
+/// Morton curve's followed by `level_order` (what `deform` does) or by reverse Cuthill–McKee.
+fn node_orders(m: &Mesh, a: &SymMatrix<f32>) {
+    let report = |name: &str, node_perm: &[u32], secs: f64| {
+        let ap = a.permuted(&unknowns_by(m, node_perm));
+        let g = spmv_gbs(&ap);
+        println!(
+            "order {name} (computed in {secs:.3} s): SpMV {g:.2} GB/s, {:.2} ms",
+            spmv_bytes(&ap) / g / 1e6
+        );
+    };
+    let ident: Vec<u32> = (0..m.n_nodes() as u32).collect();
+    report("generator", &ident, 0.0);
+    let t = Instant::now();
+    let morton = deform::spring::spatial_order(&m.coords);
+    let t_morton = t.elapsed().as_secs_f64();
+    report("morton", &morton, t_morton);
+    let mut mm = m.clone();
+    mm.renumber_nodes(&morton).unwrap();
+    let adj = mesh::Adjacency::build(&mm);
+    let t = Instant::now();
+    let level = deform::spring::level_order(&adj);
+    let t_level = t.elapsed().as_secs_f64();
+    let composed: Vec<u32> = morton.iter().map(|&p| level[p as usize]).collect();
+    report(
+        "morton + level order (deform's)",
+        &composed,
+        t_morton + t_level,
+    );
+    let t = Instant::now();
+    let rcm = mesh::order::reverse_cuthill_mckee(adj.n_nodes(), |i| adj.neighbours(i));
+    let t_rcm = t.elapsed().as_secs_f64();
+    let mut inv = vec![0u32; rcm.len()];
+    for (k, &o) in rcm.iter().enumerate() {
+        inv[o as usize] = k as u32;
+    }
+    let composed: Vec<u32> = morton.iter().map(|&p| inv[p as usize]).collect();
+    report("morton + RCM", &composed, t_morton + t_rcm);
+}
+
+/// The unknowns of [`system`] (the nodes off the wing and far-field markers, in node order)
+/// reordered by their nodes' indices under `node_perm` (node i → `node_perm[i]`): new unknown
+/// k is old unknown `result[k]`.
+fn unknowns_by(m: &Mesh, node_perm: &[u32]) -> Vec<u32> {
+    let mut unknown = vec![true; m.n_nodes()];
+    for mk in &m.markers {
+        if mk.name != "y_m" {
+            for i in mk.elements.node_set() {
+                unknown[i as usize] = false;
+            }
+        }
+    }
+    let nodes: Vec<usize> = (0..m.n_nodes()).filter(|&i| unknown[i]).collect();
+    let mut new_to_old: Vec<u32> = (0..nodes.len() as u32).collect();
+    new_to_old.sort_by_key(|&u| node_perm[nodes[u as usize]]);
+    new_to_old
+}
+
+/// The system in `deform`'s internal order (Morton curve, then `level_order`).
+fn in_deform_order(m: &Mesh, a: &SymMatrix<f32>, b: &[V3]) -> (SymMatrix<f32>, Vec<V3>) {
+    let morton = deform::spring::spatial_order(&m.coords);
+    let mut mm = m.clone();
+    mm.renumber_nodes(&morton).unwrap();
+    let level = deform::spring::level_order(&mesh::Adjacency::build(&mm));
+    let composed: Vec<u32> = morton.iter().map(|&p| level[p as usize]).collect();
+    let order = unknowns_by(m, &composed);
+    let bp = order.iter().map(|&o| b[o as usize]).collect();
+    (a.permuted(&order), bp)
 }
 
 /// `DEFORM_BENCH_STIFFNESS` = `l`, `l2` (default) or `volume`.
@@ -201,13 +275,30 @@ fn figures() {
             m.n_nodes(),
             m.tets().len()
         );
-        // Linear solves on the system (natural order of the generator).
+        // Linear solves on the system in deform's internal order (`DEFORM_BENCH_ORDERS`:
+        // first the SpMV in other orders).
         let (a, b) = system(&m, &bc);
+        if std::env::var("DEFORM_BENCH_ORDERS").is_ok() {
+            node_orders(&m, &a);
+        }
+        let (a, b) = in_deform_order(&m, &a, &b);
         let triad = triad_gbs(4_000_000);
         let spmv = spmv_gbs(&a);
+        let t_spmv = spmv_bytes(&a) / spmv / 1e6;
+        // The same matrix with f64 values, for comparison in the same run.
+        let a64 = SymMatrix {
+            diag: a.diag.clone(),
+            offsets: a.offsets.clone(),
+            cols: a.cols.clone(),
+            vals: a.vals.iter().map(|&v| f64::from(v)).collect(),
+        };
+        let spmv64 = spmv_gbs(&a64);
+        let t_spmv64 = spmv_bytes(&a64) / spmv64 / 1e6;
+        drop(a64);
         println!(
-            "bandwidth: triad {triad:.2} GB/s, SpMV {spmv:.2} GB/s ({:.0} %), nnz/row {:.1}",
+            "bandwidth: triad {triad:.2} GB/s, SpMV {spmv:.2} GB/s ({:.0} %, {t_spmv:.2} ms; with f64 values {spmv64:.2} GB/s, {:.0} %, {t_spmv64:.2} ms), nnz/row {:.1}",
             100.0 * spmv / triad,
+            100.0 * spmv64 / triad,
             a.nnz_offdiag() as f64 / a.n() as f64
         );
         let so = SolveOptions {
@@ -377,6 +468,7 @@ fn print_memory_and_load() {
 fn benches(c: &mut Criterion) {
     let (m, bc) = case(46);
     let (a, b) = system(&m, &bc);
+    let (a, b) = in_deform_order(&m, &a, &b);
     let x: Vec<V3> = (0..a.n()).map(|i| [i as f64, 1.0, -1.0]).collect();
     let mut y = vec![[0.0; 3]; a.n()];
     let mut g = c.benchmark_group("kernels");

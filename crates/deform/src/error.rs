@@ -126,6 +126,19 @@ pub enum Error {
         /// Final relative residual.
         residual: f64,
     },
+    /// A spring's stiffness is outside single precision's normal range after scaling by the
+    /// grid size: coincident nodes, or edge lengths (or wall distances) spanning ~19 orders
+    /// of magnitude.
+    #[error(
+        "spring between nodes {} and {}: stiffness {value:e} (relative to the grid size) is out of range; coincident nodes?",
+        nodes[0], nodes[1]
+    )]
+    Stiffness {
+        /// The spring's two nodes (input numbering).
+        nodes: [u32; 2],
+        /// The scaled stiffness.
+        value: f64,
+    },
     /// A node sliding on a support curve or surface of the geometry cannot be handled: not
     /// classified, off its support, a singular support, a failed parameter iteration.
     #[error("{}{entity}: {reason}", node.map(|n| format!("node {n} on ")).unwrap_or_default())]
@@ -137,6 +150,30 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+}
+
+impl Error {
+    /// The error with its node numbers taken back to the input numbering: node `k` of the
+    /// renumbered grid is input node `inv[k]`.
+    pub(crate) fn renumbered(self, inv: &[u32]) -> Self {
+        let back = |v: u32| inv.get(v as usize).copied().unwrap_or(v);
+        match self {
+            Error::Support {
+                node: Some(v),
+                entity,
+                reason,
+            } => Error::Support {
+                node: Some(back(v)),
+                entity,
+                reason,
+            },
+            Error::Stiffness { nodes, value } => Error::Stiffness {
+                nodes: nodes.map(back),
+                value,
+            },
+            e => e,
+        }
+    }
 }
 
 /// `Result` with [`Error`] as the default error type.

@@ -17,7 +17,7 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
-use super::csr::{Csr, SymMatrix};
+use super::csr::{Csr, Entry, SymMatrix};
 use super::pcg::Preconditioner;
 use super::vecops::{CHUNK, V3};
 use crate::error::{Error, Result};
@@ -73,9 +73,10 @@ impl Weights<'_> {
 }
 
 /// A smoothed-aggregation multigrid hierarchy over a borrowed ([`Amg::new`]) or owned
-/// ([`Amg::new_owned`], kept for reuse across solves) fine matrix.
-pub struct Amg<'a> {
-    fine: std::borrow::Cow<'a, SymMatrix>,
+/// ([`Amg::new_owned`], kept for reuse across solves) fine matrix, whose values are stored
+/// as `T`; the coarse matrices are f64.
+pub struct Amg<'a, T: Entry = f64> {
+    fine: std::borrow::Cow<'a, SymMatrix<T>>,
     levels: Vec<Level>,
     /// Coarse matrices A_1 … A_L (A_0 is `fine`).
     coarse: Vec<SymMatrix>,
@@ -105,77 +106,46 @@ pub struct AmgInfo {
     pub operator_complexity: f64,
 }
 
-impl<'a> Amg<'a> {
+impl<'a, T: Entry> Amg<'a, T> {
     /// Builds the hierarchy for `a` (symmetric positive definite, positive diagonal).
-    pub fn new(a: &'a SymMatrix, opts: &AmgOptions) -> Result<Self> {
+    pub fn new(a: &'a SymMatrix<T>, opts: &AmgOptions) -> Result<Self> {
         Self::build(std::borrow::Cow::Borrowed(a), opts)
     }
 
     /// [`Amg::new`] taking the fine matrix by value (the hierarchy can then be stored and
     /// reused, e.g. by [`crate::Deformer`]).
-    pub fn new_owned(a: SymMatrix, opts: &AmgOptions) -> Result<Amg<'static>> {
+    pub fn new_owned(a: SymMatrix<T>, opts: &AmgOptions) -> Result<Amg<'static, T>> {
         Amg::build(std::borrow::Cow::Owned(a), opts)
     }
 
     /// The fine matrix A_0.
-    pub fn fine(&self) -> &SymMatrix {
+    pub fn fine(&self) -> &SymMatrix<T> {
         &self.fine
     }
 
-    fn build(fine: std::borrow::Cow<'a, SymMatrix>, opts: &AmgOptions) -> Result<Self> {
-        let a: &SymMatrix = &fine;
+    fn build(fine: std::borrow::Cow<'a, SymMatrix<T>>, opts: &AmgOptions) -> Result<Self> {
+        let a: &SymMatrix<T> = &fine;
         let mut levels = Vec::new();
         let mut coarse: Vec<SymMatrix> = Vec::new();
         loop {
-            let cur: &SymMatrix = coarse.last().unwrap_or(a);
-            if cur.n() <= opts.max_coarse || levels.len() + 1 >= opts.max_levels {
+            let done = |n: usize| n <= opts.max_coarse || levels.len() + 1 >= opts.max_levels;
+            let step = match coarse.last() {
+                None if done(a.n()) => None,
+                None => Some(coarsen(a, opts.strength, levels.len())),
+                Some(c) if done(c.n()) => None,
+                Some(c) => Some(coarsen(c, opts.strength, levels.len())),
+            };
+            let Some(Some((level, ac))) = step else {
                 break;
-            }
-            // The threshold halves on each coarser level (coarse operators have more, weaker
-            // connections per row).
-            let theta = opts.strength * 0.5f64.powi(levels.len() as i32);
-            let trace = std::env::var_os("DEFORM_AMG_TRACE").is_some();
-            let t0 = std::time::Instant::now();
-            let (agg, nagg) = aggregate(cur, theta);
-            let t_agg = t0.elapsed().as_secs_f64();
-            if nagg == 0 || nagg * 10 > cur.n() * 9 {
-                // Coarsening stalled: stop here.
-                break;
-            }
-            let rho = gershgorin(cur);
-            let omega = 4.0 / (3.0 * rho);
-            let mut p = smoothed_prolongator(cur, &agg, nagg, omega);
-            // The transfer operators are stored in single precision; the coarse matrix is the
-            // Galerkin product of the rounded P, so the V-cycle stays a symmetric positive
-            // definite preconditioner (A itself and every vector stay f64).
-            for v in &mut p.vals {
-                *v = f64::from(*v as f32);
-            }
-            let t_p = t0.elapsed().as_secs_f64();
-            let r = p.transpose();
-            let t_r = t0.elapsed().as_secs_f64();
-            let ac = galerkin(cur, &p, &r);
-            if trace {
-                eprintln!(
-                    "amg level {}: n {} -> {nagg}, nnz(P) {}, nnz(A_c) {}, aggregate {t_agg:.3} s, P {:.3} s, Pt {:.3} s, RAP {:.3} s",
-                    levels.len(),
-                    cur.n(),
-                    p.cols.len(),
-                    ac.cols.len(),
-                    t_p - t_agg,
-                    t_r - t_p,
-                    t0.elapsed().as_secs_f64() - t_r
-                );
-            }
-            levels.push(Level {
-                p: Transfer::from(p),
-                r: Transfer::from(r),
-                omega,
-            });
+            };
+            levels.push(level);
             coarse.push(ac);
         }
-        let last: &SymMatrix = coarse.last().unwrap_or(a);
-        let chol = DenseCholesky::new(last, levels.len())?;
+        let chol = match coarse.last() {
+            Some(c) => DenseCholesky::new(c, levels.len())?,
+            None => DenseCholesky::new(a, 0)?,
+        };
+        let nc = coarse.last().map_or(a.n(), |c| c.n());
         // Levels 1 … L (the finest level works in the caller's vectors).
         let mut scratch = Vec::new();
         for c in coarse.iter().take(levels.len().saturating_sub(1)) {
@@ -186,7 +156,6 @@ impl<'a> Amg<'a> {
                 x: vec![[0.0; 3]; n],
             });
         }
-        let nc = last.n();
         scratch.push(Scratch {
             b: vec![[0.0; 3]; nc],
             out: vec![[0.0; 3]; nc],
@@ -218,22 +187,22 @@ impl<'a> Amg<'a> {
         }
     }
 
-    fn matrix(&self, l: usize) -> &SymMatrix {
-        if l == 0 {
-            &self.fine
-        } else {
-            &self.coarse[l - 1]
-        }
-    }
-
-    /// out ← V-cycle applied to `b` on level `l`; `x` is the level's iterate, `out` holds
-    /// the residual until the last sweep, `deeper` is the scratch of the coarser levels.
-    fn vcycle(&self, l: usize, b: &[V3], out: &mut [V3], x: &mut [V3], deeper: &mut [Scratch]) {
+    /// out ← V-cycle applied to `b` on level `l`, whose matrix is `a`; `x` is the level's
+    /// iterate, `out` holds the residual until the last sweep, `deeper` is the scratch of
+    /// the coarser levels.
+    fn vcycle<M: Entry>(
+        &self,
+        a: &SymMatrix<M>,
+        l: usize,
+        b: &[V3],
+        out: &mut [V3],
+        x: &mut [V3],
+        deeper: &mut [Scratch],
+    ) {
         if l == self.levels.len() {
             self.chol.solve(b, out);
             return;
         }
-        let a = self.matrix(l);
         let lev = &self.levels[l];
         let w = Weights {
             omega: lev.omega,
@@ -259,7 +228,15 @@ impl<'a> Amg<'a> {
             .split_first_mut()
             .expect("one scratch per level below the finest");
         spmv_csr(&lev.r, out, &mut next.b);
-        self.vcycle(l + 1, &next.b, &mut next.out, &mut next.x, rest);
+        // coarse[l] is the matrix of level l + 1.
+        self.vcycle(
+            &self.coarse[l],
+            l + 1,
+            &next.b,
+            &mut next.out,
+            &mut next.x,
+            rest,
+        );
         // Prolongate and correct; post-smoothing, the last sweep written straight to `out`.
         spmv_csr_add(&lev.p, &next.out, x);
         for _ in 1..self.sweeps {
@@ -269,7 +246,7 @@ impl<'a> Amg<'a> {
     }
 }
 
-impl Preconditioner for Amg<'_> {
+impl<T: Entry> Preconditioner for Amg<'_, T> {
     fn apply(&self, r: &[V3], z: &mut [V3]) {
         let mut own = Vec::new();
         if !self.levels.is_empty() {
@@ -285,7 +262,7 @@ impl Preconditioner for Amg<'_> {
             return;
         }
         let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        self.vcycle(0, r, z, work, &mut guard);
+        self.vcycle(&*self.fine, 0, r, z, work, &mut guard);
     }
     fn name(&self) -> &'static str {
         "amg"
@@ -302,8 +279,58 @@ impl Preconditioner for Amg<'_> {
     }
 }
 
+/// One coarsening step of the set-up (level `depth` → `depth + 1`): aggregation, smoothed
+/// prolongator, restriction and Galerkin product. `None` when the coarsening stalls.
+fn coarsen<T: Entry>(
+    cur: &SymMatrix<T>,
+    strength: f64,
+    depth: usize,
+) -> Option<(Level, SymMatrix)> {
+    // The threshold halves on each coarser level (coarse operators have more, weaker
+    // connections per row).
+    let theta = strength * 0.5f64.powi(depth as i32);
+    let trace = std::env::var_os("DEFORM_AMG_TRACE").is_some();
+    let t0 = std::time::Instant::now();
+    let (agg, nagg) = aggregate(cur, theta);
+    let t_agg = t0.elapsed().as_secs_f64();
+    if nagg == 0 || nagg * 10 > cur.n() * 9 {
+        // Coarsening stalled: stop here.
+        return None;
+    }
+    let rho = gershgorin(cur);
+    let omega = 4.0 / (3.0 * rho);
+    let mut p = smoothed_prolongator(cur, &agg, nagg, omega);
+    // The transfer operators are stored in single precision; the coarse matrix is the
+    // Galerkin product of the rounded P, so the V-cycle stays a symmetric positive
+    // definite preconditioner (A itself and every vector stay f64).
+    for v in &mut p.vals {
+        *v = f64::from(*v as f32);
+    }
+    let t_p = t0.elapsed().as_secs_f64();
+    let r = p.transpose();
+    let t_r = t0.elapsed().as_secs_f64();
+    let ac = galerkin(cur, &p, &r);
+    if trace {
+        eprintln!(
+            "amg level {depth}: n {} -> {nagg}, nnz(P) {}, nnz(A_c) {}, aggregate {t_agg:.3} s, P {:.3} s, Pt {:.3} s, RAP {:.3} s",
+            cur.n(),
+            p.cols.len(),
+            ac.cols.len(),
+            t_p - t_agg,
+            t_r - t_p,
+            t0.elapsed().as_secs_f64() - t_r
+        );
+    }
+    let level = Level {
+        p: Transfer::from(p),
+        r: Transfer::from(r),
+        omega,
+    };
+    Some((level, ac))
+}
+
 /// x ← x + W (b − A x); `r` is scratch.
-fn jacobi_sweep(a: &SymMatrix, w: Weights, b: &[V3], x: &mut [V3], r: &mut [V3]) {
+fn jacobi_sweep<M: Entry>(a: &SymMatrix<M>, w: Weights, b: &[V3], x: &mut [V3], r: &mut [V3]) {
     a.residual(b, x, r);
     x.par_chunks_mut(CHUNK)
         .zip(r.par_chunks(CHUNK))
@@ -321,7 +348,7 @@ fn jacobi_sweep(a: &SymMatrix, w: Weights, b: &[V3], x: &mut [V3], r: &mut [V3])
 
 /// out ← x + W (b − A x) (one Jacobi sweep written to another vector; the same arithmetic
 /// as [`jacobi_sweep`], row by row).
-fn jacobi_sweep_into(a: &SymMatrix, w: Weights, b: &[V3], x: &[V3], out: &mut [V3]) {
+fn jacobi_sweep_into<M: Entry>(a: &SymMatrix<M>, w: Weights, b: &[V3], x: &[V3], out: &mut [V3]) {
     out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, os)| {
         let r0 = c * CHUNK;
         a.rows_mul(r0, r0 + os.len(), x, |i, v| {
@@ -396,14 +423,14 @@ fn spmv_csr_add(m: &Transfer, x: &[V3], y: &mut [V3]) {
 }
 
 /// Gershgorin bound of ρ(D⁻¹A).
-fn gershgorin(a: &SymMatrix) -> f64 {
+fn gershgorin<T: Entry>(a: &SymMatrix<T>) -> f64 {
     (0..a.n())
         .into_par_iter()
         .with_min_len(CHUNK)
         .map(|i| {
             let s: f64 = a.vals[a.offsets[i]..a.offsets[i + 1]]
                 .iter()
-                .map(|v| v.abs())
+                .map(|v| v.get().abs())
                 .sum();
             1.0 + s / a.diag[i]
         })
@@ -411,12 +438,12 @@ fn gershgorin(a: &SymMatrix) -> f64 {
 }
 
 /// Greedy aggregation; returns the aggregate of every node and the aggregate count.
-fn aggregate(a: &SymMatrix, theta: f64) -> (Vec<u32>, usize) {
+fn aggregate<T: Entry>(a: &SymMatrix<T>, theta: f64) -> (Vec<u32>, usize) {
     const NONE: u32 = u32::MAX;
     let n = a.n();
     let strong = |i: usize, p: usize| {
         let j = a.cols[p] as usize;
-        a.vals[p].abs() >= theta * (a.diag[i] * a.diag[j]).abs().sqrt()
+        a.vals[p].get().abs() >= theta * (a.diag[i] * a.diag[j]).abs().sqrt()
     };
     let mut agg = vec![NONE; n];
     let mut nagg = 0u32;
@@ -455,8 +482,8 @@ fn aggregate(a: &SymMatrix, theta: f64) -> (Vec<u32>, usize) {
         let mut best = (0.0, NONE);
         for p in a.offsets[i]..a.offsets[i + 1] {
             let g = snapshot[a.cols[p] as usize];
-            if g != NONE && strong(i, p) && a.vals[p].abs() > best.0 {
-                best = (a.vals[p].abs(), g);
+            if g != NONE && strong(i, p) && a.vals[p].get().abs() > best.0 {
+                best = (a.vals[p].get().abs(), g);
             }
         }
         agg[i] = best.1;
@@ -484,7 +511,7 @@ fn aggregate(a: &SymMatrix, theta: f64) -> (Vec<u32>, usize) {
 /// added to its aggregate's entry found by a linear search, in the row's order — the sums of
 /// a stable sort by column followed by merging (`merge_row`), bit for bit — and only the
 /// distinct entries are sorted.
-fn smoothed_prolongator(a: &SymMatrix, agg: &[u32], nagg: usize, omega: f64) -> Csr {
+fn smoothed_prolongator<T: Entry>(a: &SymMatrix<T>, agg: &[u32], nagg: usize, omega: f64) -> Csr {
     Csr::from_rows(a.n(), nagg, |i, buf| {
         let mut add = |c: u32, v: f64| match buf.iter_mut().find(|e| e.0 == c) {
             Some(e) => e.1 += v,
@@ -493,7 +520,7 @@ fn smoothed_prolongator(a: &SymMatrix, agg: &[u32], nagg: usize, omega: f64) -> 
         add(agg[i], 1.0 - omega);
         let s = omega / a.diag[i];
         for p in a.offsets[i]..a.offsets[i + 1] {
-            add(agg[a.cols[p] as usize], -s * a.vals[p]);
+            add(agg[a.cols[p] as usize], -s * a.vals[p].get());
         }
         buf.sort_unstable_by_key(|e| e.0);
     })
@@ -549,7 +576,7 @@ const GALERKIN_ROWS: usize = 4096;
 /// temporary of the set-up otherwise); the fine rows shared by neighbouring blocks are
 /// computed once per block. Every row is computed by one task in a fixed order, so the
 /// result does not depend on the thread count (nor on the block size).
-fn galerkin(a: &SymMatrix, p: &Csr, r: &Csr) -> SymMatrix {
+fn galerkin<T: Entry>(a: &SymMatrix<T>, p: &Csr, r: &Csr) -> SymMatrix {
     let nc = p.ncols;
     let n = a.n();
     let ap_row = |i: usize, acc: &mut Acc| {
@@ -559,7 +586,7 @@ fn galerkin(a: &SymMatrix, p: &Csr, r: &Csr) -> SymMatrix {
         }
         for k in a.offsets[i]..a.offsets[i + 1] {
             let j = a.cols[k] as usize;
-            let v = a.vals[k];
+            let v = a.vals[k].get();
             for q in p.offsets[j]..p.offsets[j + 1] {
                 acc.add(p.cols[q], v * p.vals[q]);
             }
@@ -640,7 +667,7 @@ struct DenseCholesky {
 }
 
 impl DenseCholesky {
-    fn new(a: &SymMatrix, level: usize) -> Result<Self> {
+    fn new<T: Entry>(a: &SymMatrix<T>, level: usize) -> Result<Self> {
         let n = a.n();
         let mut l = vec![0.0; n * n];
         for (i, row) in a.to_dense().into_iter().enumerate() {

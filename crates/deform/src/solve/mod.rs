@@ -10,7 +10,7 @@ pub mod pcg;
 pub mod vecops;
 
 pub use amg::{Amg, AmgInfo, AmgOptions};
-pub use csr::{Csr, Graph, SymMatrix};
+pub use csr::{Csr, Entry, Graph, SymMatrix};
 pub use order::reverse_cuthill_mckee;
 pub use pcg::{
     Constraint, Constraints, Jacobi, Preconditioner, SolveOptions, SolveReport, pcg,
@@ -115,6 +115,58 @@ mod tests {
             },
             b,
         )
+    }
+
+    /// `a` with its values rounded to single precision, stored as f32 and as f64.
+    fn rounded(a: &SymMatrix) -> (SymMatrix<f32>, SymMatrix) {
+        let a32 = SymMatrix {
+            diag: a.diag.clone(),
+            offsets: a.offsets.clone(),
+            cols: a.cols.clone(),
+            vals: a.vals.iter().map(|&v| v as f32).collect(),
+        };
+        let a64 = SymMatrix {
+            diag: a.diag.clone(),
+            offsets: a.offsets.clone(),
+            cols: a.cols.clone(),
+            vals: a32.vals.iter().map(|&v| f64::from(v)).collect(),
+        };
+        (a32, a64)
+    }
+
+    #[test]
+    fn single_precision_storage_computes_the_f64_products_of_the_rounded_values() {
+        let (a, b) = grid_system(21, 17, 15); // 4485 unknowns: more than one chunk
+        let (a32, a64) = rounded(&a);
+        let bits = |v: &[V3]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let x: Vec<V3> = (0..a.n())
+            .map(|i| {
+                [
+                    (0.37 * i as f64).sin(),
+                    1e-3 * i as f64,
+                    (0.11 * i as f64).cos(),
+                ]
+            })
+            .collect();
+        let (mut y32, mut y64) = (vec![[0.0; 3]; a.n()], vec![[0.0; 3]; a.n()]);
+        let d32 = a32.mul_dot(&x, &mut y32);
+        let d64 = a64.mul_dot(&x, &mut y64);
+        assert_eq!((d32.to_bits(), bits(&y32)), (d64.to_bits(), bits(&y64)));
+        let r32 = a32.residual(&b, &x, &mut y32);
+        let r64 = a64.residual(&b, &x, &mut y64);
+        assert_eq!((r32.to_bits(), bits(&y32)), (r64.to_bits(), bits(&y64)));
+        // Multigrid-preconditioned CG: the same iterates (the coarse levels are f64 in both).
+        let so = SolveOptions::default();
+        let none = Constraints::default();
+        let (mut x32, mut x64) = (vec![[0.0; 3]; a.n()], vec![[0.0; 3]; a.n()]);
+        let m32 = Amg::new(&a32, &AmgOptions::default()).unwrap();
+        let m64 = Amg::new(&a64, &AmgOptions::default()).unwrap();
+        let s32 = pcg(&a32, &b, &mut x32, &m32, &none, &so);
+        let s64 = pcg(&a64, &b, &mut x64, &m64, &none, &so);
+        assert!(s32.converged && s32.iterations == s64.iterations);
+        assert_eq!(s32.rel_residual.to_bits(), s64.rel_residual.to_bits());
+        assert_eq!(bits(&x32), bits(&x64));
+        assert!(a32.bytes() < a64.bytes());
     }
 
     fn dense_solve(a: &SymMatrix, b: &[V3]) -> Vec<V3> {

@@ -8,7 +8,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::csr::SymMatrix;
+use super::csr::{Entry, SymMatrix};
 use super::vecops::{CHUNK, V3, axpy, dot, norm, ordered_sum, xpby};
 
 /// A linear constraint on one unknown's 3-vector.
@@ -89,7 +89,7 @@ pub struct Jacobi {
 
 impl Jacobi {
     /// From the matrix diagonal (must be positive).
-    pub fn new(a: &SymMatrix) -> Self {
+    pub fn new<T: Entry>(a: &SymMatrix<T>) -> Self {
         Self {
             inv_diag: a.diag.iter().map(|d| 1.0 / d).collect(),
         }
@@ -151,8 +151,8 @@ pub struct SolveReport {
 /// Solves A x = b (three components) by preconditioned CG from the initial guess in `x`,
 /// in the subspace of `cons` (b, x and the search directions are projected; the preconditioned
 /// residual too). Deterministic for any thread count.
-pub fn pcg<P: Preconditioner + ?Sized>(
-    a: &SymMatrix,
+pub fn pcg<P: Preconditioner + ?Sized, T: Entry>(
+    a: &SymMatrix<T>,
     b: &[V3],
     x: &mut [V3],
     m: &P,
@@ -275,7 +275,7 @@ impl<'b> ProjectedRhs<'b> {
 
     /// r ← P b − A x; returns |r|² only without constraints (otherwise the caller projects r
     /// and sums it again).
-    fn residual(&self, a: &SymMatrix, x: &[V3], r: &mut [V3]) -> f64 {
+    fn residual<T: Entry>(&self, a: &SymMatrix<T>, x: &[V3], r: &mut [V3]) -> f64 {
         let rr = a.residual(self.b, x, r);
         let mut t = 0;
         while t < self.items.len() {
@@ -313,8 +313,8 @@ fn update_residual(alpha: f64, q: &[V3], r: &mut [V3]) -> f64 {
 /// nodes are updated from the previous iterate (deterministic in parallel). Stops when the
 /// largest node update |δx_i| (Eq. 24) is ≤ `step_tol` (a length), or when the relative
 /// residual reaches `opts.rel_tol`.
-pub fn point_iteration(
-    a: &SymMatrix,
+pub fn point_iteration<T: Entry>(
+    a: &SymMatrix<T>,
     b: &[V3],
     x: &mut [V3],
     cons: &Constraints,

@@ -282,6 +282,44 @@ fn errors_name_the_entity() {
 }
 
 #[test]
+fn coincident_nodes_are_refused_naming_the_spring() {
+    // An interior node moved onto a neighbour: a spring of zero length (infinite stiffness).
+    let mut m = box_grid();
+    let mut on_marker = vec![false; m.n_nodes()];
+    for mk in &m.markers {
+        for v in mk.elements.node_set() {
+            on_marker[v as usize] = true;
+        }
+    }
+    let adj = mesh::Adjacency::build(&m);
+    let i = (0..m.n_nodes()).rev().find(|&i| !on_marker[i]).unwrap();
+    let j = adj.neighbours(i)[0] as usize;
+    m.coords[i] = m.coords[j];
+    let bc = BoundaryConditions {
+        markers: vec![(
+            "wing".into(),
+            MarkerRole::Rigid(RigidMotion::translation([0.0, 0.0, 0.01])),
+        )],
+        displacements: vec![],
+    };
+    for renumber in [true, false] {
+        let opts = DeformOptions {
+            renumber,
+            ..Default::default()
+        };
+        let e = deform(&m, &bc, &opts).unwrap_err();
+        let deform::Error::Stiffness { nodes, .. } = e else {
+            panic!("{e}");
+        };
+        // Input numbering, whatever the internal order; the first spring found is one of
+        // the zero-length node's.
+        assert!(nodes.contains(&(i as u32)), "{nodes:?}, expected {i}");
+        let other = nodes[0] + nodes[1] - i as u32;
+        assert_eq!(m.coords[other as usize], m.coords[i], "{nodes:?}");
+    }
+}
+
+#[test]
 fn inverting_motion_is_refused_unless_allowed() {
     // Push the wing through the far side of the box: impossible without inversion.
     let m = box_grid();
