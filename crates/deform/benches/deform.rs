@@ -329,6 +329,10 @@ fn figures() {
             &a,
             &AmgOptions {
                 strength,
+                coarse_cycles: std::env::var("DEFORM_AMG_CYCLES")
+                    .ok()
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or(AmgOptions::default().coarse_cycles),
                 ..Default::default()
             },
         )

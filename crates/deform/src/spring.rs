@@ -79,7 +79,7 @@ pub enum Stiffness {
 /// The linear solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum SolverKind {
-    /// Conjugate gradients with the smoothed-aggregation multigrid V-cycle.
+    /// Conjugate gradients with the smoothed-aggregation multigrid W-cycle.
     PcgMultigrid,
     /// Conjugate gradients with the Jacobi preconditioner.
     PcgJacobi,
