@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 use super::csr::{Csr, Entry, SymMatrix};
 use super::pcg::Preconditioner;
-use super::vecops::{CHUNK, V3};
+use super::vecops::{CHUNK, V3, ordered_sum};
 use crate::error::{Error, Result};
 
 /// Multigrid setup options.
@@ -207,9 +207,9 @@ impl<'a, T: Entry> Amg<'a, T> {
         }
     }
 
-    /// out ← V-cycle applied to `b` on level `l`, whose matrix is `a`; `x` is the level's
+    /// out ← cycle applied to `b` on level `l`, whose matrix is `a`; `x` is the level's
     /// iterate, `out` holds the residual until the last sweep, `deeper` is the scratch of
-    /// the coarser levels.
+    /// the coarser levels. Returns b · out (0 on the coarsest level).
     fn vcycle<M: Entry>(
         &self,
         a: &SymMatrix<M>,
@@ -218,10 +218,10 @@ impl<'a, T: Entry> Amg<'a, T> {
         out: &mut [V3],
         x: &mut [V3],
         deeper: &mut [Scratch],
-    ) {
+    ) -> f64 {
         if l == self.levels.len() {
             self.chol.solve(b, out);
-            return;
+            return 0.0;
         }
         let lev = &self.levels[l];
         let w = Weights {
@@ -268,7 +268,7 @@ impl<'a, T: Entry> Amg<'a, T> {
         for _ in 1..self.sweeps {
             jacobi_sweep(a, w, b, x, out);
         }
-        jacobi_sweep_into(a, w, b, x, out);
+        jacobi_sweep_into(a, w, b, x, out)
     }
 }
 
@@ -282,13 +282,17 @@ impl<T: Entry> Preconditioner for Amg<'_, T> {
     }
     /// The finest level's iterate is kept in `work` (no fine-level vector of its own).
     fn apply_with(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) {
+        self.apply_dot(r, z, work);
+    }
+    /// r · z from the last smoothing sweep.
+    fn apply_dot(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) -> f64 {
         if self.levels.is_empty() {
             // A single level: the dense factorisation is the preconditioner.
             self.chol.solve(r, z);
-            return;
+            return super::vecops::dot(r, z);
         }
         let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        self.vcycle(&*self.fine, 0, r, z, work, &mut guard);
+        self.vcycle(&*self.fine, 0, r, z, work, &mut guard)
     }
     fn name(&self) -> &'static str {
         "amg"
@@ -373,17 +377,34 @@ fn jacobi_sweep<M: Entry>(a: &SymMatrix<M>, w: Weights, b: &[V3], x: &mut [V3], 
 }
 
 /// out ← x + W (b − A x) (one Jacobi sweep written to another vector; the same arithmetic
-/// as [`jacobi_sweep`], row by row).
-fn jacobi_sweep_into<M: Entry>(a: &SymMatrix<M>, w: Weights, b: &[V3], x: &[V3], out: &mut [V3]) {
-    out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, os)| {
-        let r0 = c * CHUNK;
-        a.rows_mul(r0, r0 + os.len(), x, |i, v| {
-            let ri = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
-            let wk = w.at(i);
-            let xi = x[i];
-            os[i - r0] = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
-        });
-    });
+/// as [`jacobi_sweep`], row by row); returns b · out (the chunked sums of
+/// [`super::vecops::dot`], bit for bit).
+fn jacobi_sweep_into<M: Entry>(
+    a: &SymMatrix<M>,
+    w: Weights,
+    b: &[V3],
+    x: &[V3],
+    out: &mut [V3],
+) -> f64 {
+    let parts: Vec<f64> = out
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .map(|(c, os)| {
+            let r0 = c * CHUNK;
+            let mut s = 0.0;
+            a.rows_mul(r0, r0 + os.len(), x, |i, v| {
+                let bi = b[i];
+                let ri = [bi[0] - v[0], bi[1] - v[1], bi[2] - v[2]];
+                let wk = w.at(i);
+                let xi = x[i];
+                let o = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
+                s += bi[0] * o[0] + bi[1] * o[1] + bi[2] * o[2];
+                os[i - r0] = o;
+            });
+            s
+        })
+        .collect();
+    ordered_sum(parts)
 }
 
 /// A multigrid transfer operator (P or R = Pᵀ) in CSR form with single-precision values

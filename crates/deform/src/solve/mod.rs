@@ -169,6 +169,25 @@ mod tests {
         assert!(a32.bytes() < a64.bytes());
     }
 
+    #[test]
+    fn fused_preconditioner_dot_equals_the_separate_dot_bit_for_bit() {
+        let (a, b) = grid_system(21, 17, 15);
+        let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+        let jac = Jacobi::new(&a);
+        let pres: [&dyn Preconditioner; 2] = [&amg, &jac];
+        for m in pres {
+            let (mut z1, mut z2, mut work) = (
+                vec![[0.0; 3]; a.n()],
+                vec![[0.0; 3]; a.n()],
+                vec![[0.0; 3]; a.n()],
+            );
+            m.apply(&b, &mut z1);
+            let rz = m.apply_dot(&b, &mut z2, &mut work);
+            assert_eq!(z1, z2, "{}", m.name());
+            assert_eq!(rz.to_bits(), vecops::dot(&b, &z1).to_bits(), "{}", m.name());
+        }
+    }
+
     fn dense_solve(a: &SymMatrix, b: &[V3]) -> Vec<V3> {
         let n = a.n();
         let mut m = a.to_dense();

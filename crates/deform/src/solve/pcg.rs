@@ -73,6 +73,12 @@ pub trait Preconditioner: Sync {
         let _ = work;
         self.apply(r, z);
     }
+    /// [`Preconditioner::apply_with`], returning r · z (bit for bit [`dot`]`(r, z)`: the
+    /// default computes it so; a preconditioner may fuse it into its last pass).
+    fn apply_dot(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) -> f64 {
+        self.apply_with(r, z, work);
+        dot(r, z)
+    }
     /// Short name for reports.
     fn name(&self) -> &'static str;
     /// Bytes held.
@@ -98,14 +104,26 @@ impl Jacobi {
 
 impl Preconditioner for Jacobi {
     fn apply(&self, r: &[V3], z: &mut [V3]) {
-        z.par_chunks_mut(CHUNK).enumerate().for_each(|(c, zs)| {
-            let r0 = c * CHUNK;
-            for (k, zi) in zs.iter_mut().enumerate() {
-                let d = self.inv_diag[r0 + k];
-                let ri = r[r0 + k];
-                *zi = [d * ri[0], d * ri[1], d * ri[2]];
-            }
-        });
+        self.apply_dot(r, z, &mut []);
+    }
+    /// z = D⁻¹ r and r · z in one pass.
+    fn apply_dot(&self, r: &[V3], z: &mut [V3], _work: &mut [V3]) -> f64 {
+        let parts: Vec<f64> = z
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(c, zs)| {
+                let r0 = c * CHUNK;
+                let mut s = 0.0;
+                for (k, zi) in zs.iter_mut().enumerate() {
+                    let d = self.inv_diag[r0 + k];
+                    let ri = r[r0 + k];
+                    *zi = [d * ri[0], d * ri[1], d * ri[2]];
+                    s += ri[0] * zi[0] + ri[1] * zi[1] + ri[2] * zi[2];
+                }
+                s
+            })
+            .collect();
+        ordered_sum(parts)
     }
     fn name(&self) -> &'static str {
         "jacobi"
@@ -185,10 +203,11 @@ pub fn pcg<P: Preconditioner + ?Sized, T: Entry>(
     let mut z = vec![[0.0; 3]; n];
     // q (A p) is dead while the preconditioner runs: it lends it as scratch.
     let mut q = vec![[0.0; 3]; n];
-    m.apply_with(&r, &mut z, &mut q);
+    // r · z before z is projected: r lies in the constraints' subspace and the projections
+    // are orthogonal, so r · P z = P r · z = r · z.
+    let mut rz = m.apply_dot(&r, &mut z, &mut q);
     cons.project(&mut z);
     let mut p = z.clone();
-    let mut rz = dot(&r, &z);
     let mut it = 0;
     while it < opts.max_iters {
         it += 1;
@@ -203,9 +222,8 @@ pub fn pcg<P: Preconditioner + ?Sized, T: Entry>(
         if rr.sqrt() <= opts.rel_tol * scale {
             break;
         }
-        m.apply_with(&r, &mut z, &mut q);
+        let rz_new = m.apply_dot(&r, &mut z, &mut q);
         cons.project(&mut z);
-        let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;
         xpby(&z, beta, &mut p);
