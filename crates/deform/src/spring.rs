@@ -1848,8 +1848,11 @@ impl<'s> Deformer<'s> {
             }
             progress("quality", inc, inc);
             let t = Instant::now();
+            let mut tt = Instant::now();
             let q1 = cell_quality(mesh, &cur);
+            tr("quality after", &mut tt);
             let after = QualitySummary::of(&q1);
+            tr("summary after", &mut tt);
             times.quality += t.elapsed().as_secs_f64();
             let low = after.min < opts.min_quality_ratio * before.min;
             let bad = after.inverted > before.inverted || low;

@@ -60,8 +60,6 @@ impl Default for AmgOptions {
 struct Level {
     /// Prolongator from the next coarser level.
     p: Transfer,
-    /// Restriction Pᵀ.
-    r: Transfer,
     /// Smoother damping ω (the weights ω / a_ii are formed when used: no stored vector).
     omega: f64,
 }
@@ -95,10 +93,11 @@ pub struct Amg<'a, T: Entry = f64> {
     scratch: Mutex<Vec<Scratch>>,
 }
 
-/// Vectors of one coarse level of the V-cycle (the finest level uses the caller's vectors):
+/// Vectors of one coarse level of the cycle (the finest level uses the caller's vectors):
 /// `b` and `out` are the level's right-hand side and result, `x` the iterate (empty on the
-/// coarsest level). The residual is kept in `out`, which is free until the
-/// last smoothing sweep writes the result there (no residual vector of its own).
+/// coarsest level). The residual is never stored (it is restricted as it is computed);
+/// with more than one sweep, `out` is the sweeps' scratch until the last sweep writes the
+/// result there.
 struct Scratch {
     b: Vec<V3>,
     out: Vec<V3>,
@@ -208,7 +207,7 @@ impl<'a, T: Entry> Amg<'a, T> {
     }
 
     /// out ← cycle applied to `b` on level `l`, whose matrix is `a`; `x` is the level's
-    /// iterate, `out` holds the residual until the last sweep, `deeper` is the scratch of
+    /// iterate, `out` is scratch until the last sweep, `deeper` is the scratch of
     /// the coarser levels. Returns b · out (0 on the coarsest level).
     fn vcycle<M: Entry>(
         &self,
@@ -242,12 +241,11 @@ impl<'a, T: Entry> Amg<'a, T> {
         for _ in 1..self.sweeps {
             jacobi_sweep(a, w, b, x, out);
         }
-        // Restrict the residual (in `out`), solve the coarse problem.
-        a.residual(b, x, out);
+        // Restrict the residual, solve the coarse problem.
         let (next, rest) = deeper
             .split_first_mut()
             .expect("one scratch per level below the finest");
-        spmv_csr(&lev.r, out, &mut next.b);
+        restrict_residual(a, &lev.p, b, x, &mut next.b);
         // coarse[l] is the matrix of level l + 1.
         let ac = &self.coarse[l];
         self.vcycle(ac, l + 1, &next.b, &mut next.out, &mut next.x, rest);
@@ -300,7 +298,7 @@ impl<T: Entry> Preconditioner for Amg<'_, T> {
     fn bytes(&self) -> usize {
         let mut b = 0;
         for (l, lev) in self.levels.iter().enumerate() {
-            b += lev.p.bytes() + lev.r.bytes();
+            b += lev.p.bytes();
             if l > 0 {
                 b += self.coarse[l - 1].bytes();
             }
@@ -353,7 +351,6 @@ fn coarsen<T: Entry>(
     }
     let level = Level {
         p: Transfer::from(p),
-        r: Transfer::from(r),
         omega,
     };
     Some((level, ac))
@@ -431,24 +428,63 @@ impl Transfer {
     }
 }
 
-/// y ← M x for a transfer operator.
-fn spmv_csr(m: &Transfer, x: &[V3], y: &mut [V3]) {
-    y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
-        let r0 = c * CHUNK;
-        for (k, yi) in ys.iter_mut().enumerate() {
-            let i = r0 + k;
-            let mut s = [0.0; 3];
-            let span = m.offsets[i]..m.offsets[i + 1];
-            for (&col, &v) in m.cols[span.clone()].iter().zip(&m.vals[span]) {
-                let v = f64::from(v);
-                let xj = x[col as usize];
-                s[0] += v * xj[0];
-                s[1] += v * xj[1];
-                s[2] += v * xj[2];
-            }
-            *yi = s;
+/// y ← Pᵀ (b − A x), without storing the residual nor Pᵀ: each chunk of [`CHUNK`] fine rows
+/// computes its residual rows and adds P's row i times r_i into a dense accumulator over the
+/// coarse unknowns, drained as a sorted sparse list; the lists are added into y in chunk
+/// order. Every coarse entry sums its terms in a fixed order (fine rows increasing), so the
+/// result does not depend on the thread count. The residual streams through the fine rows
+/// once and P is read in its storage order (the gathers of a stored restriction, whose rows
+/// reach across the aggregates' fine rows, were the slow part).
+fn restrict_residual<M: Entry>(a: &SymMatrix<M>, p: &Transfer, b: &[V3], x: &[V3], y: &mut [V3]) {
+    let n = a.n();
+    let nc = y.len();
+    let parts: Vec<Vec<(u32, V3)>> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map_init(
+            || (vec![[0.0; 3]; nc], vec![false; nc], Vec::<u32>::new()),
+            |(val, used, list), c| {
+                let lo = c * CHUNK;
+                let hi = (lo + CHUNK).min(n);
+                a.rows_mul(lo, hi, x, |i, v| {
+                    let r = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
+                    let span = p.offsets[i]..p.offsets[i + 1];
+                    for (&col, &w) in p.cols[span.clone()].iter().zip(&p.vals[span]) {
+                        let (w, ci) = (f64::from(w), col as usize);
+                        let t = [w * r[0], w * r[1], w * r[2]];
+                        if used[ci] {
+                            let e = &mut val[ci];
+                            e[0] += t[0];
+                            e[1] += t[1];
+                            e[2] += t[2];
+                        } else {
+                            used[ci] = true;
+                            val[ci] = t;
+                            list.push(col);
+                        }
+                    }
+                });
+                list.sort_unstable();
+                let out = list
+                    .iter()
+                    .map(|&ci| {
+                        used[ci as usize] = false;
+                        (ci, val[ci as usize])
+                    })
+                    .collect();
+                list.clear();
+                out
+            },
+        )
+        .collect();
+    y.fill([0.0; 3]);
+    for part in parts {
+        for (ci, v) in part {
+            let e = &mut y[ci as usize];
+            e[0] += v[0];
+            e[1] += v[1];
+            e[2] += v[2];
         }
-    });
+    }
 }
 
 /// y ← y + M x.
