@@ -1,17 +1,21 @@
 //! Quality of the wing-in-box case (the benchmark's generator) pitched 5°, for option
 //! variants given in the environment: `N` (cubes per side, default 30), `STIFF` (l, l2,
 //! volume, wall), `ROT` (0/1), `RATIO` (guard's min_quality_ratio, to force increments).
-//! `WRITE_SU2=path` writes the case's grid as SU2 instead.
+//! `WRITE_SU2=path` writes the case's grid as SU2 instead (nodes randomly renumbered with
+//! `SHUFFLE=seed`).
 
 use deform::{DeformOptions, Stiffness, deform};
 
 fn main() {
     let env = |k: &str, d: &str| std::env::var(k).unwrap_or_else(|_| d.into());
     let n: usize = env("N", "30").parse().unwrap();
-    let m = deform::generate::wing_in_box(n);
+    let mut m = deform::generate::wing_in_box(n);
     let bc = deform::generate::wing_pitch_conditions();
     if let Ok(path) = std::env::var("WRITE_SU2") {
         // Write the case's grid (for end-to-end runs of `aeroshape deform`) and stop.
+        if let Ok(seed) = std::env::var("SHUFFLE") {
+            mesh::generate::shuffle_nodes(&mut m, seed.parse().unwrap());
+        }
         let mut f = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
         mesh::io::write(&m, mesh::io::Format::Su2, &mut f).unwrap();
         println!("wrote {path}: {} nodes", m.n_nodes());
