@@ -2,10 +2,12 @@
 //! `MARKER_TAG` / `MARKER_ELEMS`. Trailing sections that SU2 tools append (periodic
 //! information, FFD boxes) are kept verbatim in [`Mesh::su2_extra`] and written back.
 //!
-//! The reader streams the input line by line. The element and point sections are read in
-//! batches of lines (each batch parsed in parallel while the next one is read) and written in
-//! parallel blocks: the same grid, errors and bytes as a sequential reader and writer, for
-//! any thread count. Element codes are VTK cell types (3 line, 5 triangle, 9 quad, 10 tetra,
+//! The reader takes the input in large blocks of whole lines (4 MiB read straight from the
+//! reader, no per-line copy); the element and point sections are parsed by pieces of a block
+//! in parallel while the next block is read, each piece collecting its own elements or
+//! points, which are then appended in line order. The writer formats parallel blocks of
+//! lines while the previous ones are written. The same grid, errors and bytes as a
+//! sequential reader and writer, for any thread count. Element codes are VTK cell types (3 line, 5 triangle, 9 quad, 10 tetra,
 //! 12 hexa, 13 prism, 14 pyramid).
 
 use std::io::{BufRead, Write};
@@ -16,7 +18,7 @@ use rayon::prelude::*;
 use crate::error::{Error, Location, Result};
 use crate::grid::{ElementKind, Elements, Marker, Mesh};
 use crate::text::{
-    LineReader, Tokens, parse_f64, parse_i64, parse_u64, push_f64, push_u64, reserve_capped, syntax,
+    Tokens, parse_f64, parse_i64, parse_u64, push_f64, push_u64, reserve_capped, syntax,
 };
 
 /// Splits `KEY= value` (value trimmed); `None` when the line has no `=`.
@@ -196,135 +198,452 @@ fn count(cx: &Ctx<'_>, ln: usize, key: &str, val: &[u8]) -> Result<usize> {
         })
 }
 
-/// Lines per batch of the element reader.
-const BATCH: usize = 1 << 14;
+/// Bytes per block of the section reader (a block holds whole lines).
+const BLOCK_BYTES: usize = 1 << 22;
 
-/// One batch of lines of a section: their text, and per line (line number, start, end).
-#[derive(Default)]
-struct Batch {
-    text: Vec<u8>,
-    spans: Vec<(usize, usize, usize)>,
-    /// Index (within the section) of the batch's first item.
-    first: usize,
-    /// The read error that ended the batch early, if any.
-    err: Option<Error>,
+/// Bytes per piece of a block (each piece parsed by one task; a piece holds whole lines).
+const PIECE_BYTES: usize = 1 << 16;
+
+/// Buffered input that hands out single lines (headers, marker tags) and blocks of whole
+/// lines (sections), reading from the inner reader in large slices. Lines end at `\n`; the
+/// `\r`s before it are dropped; a last line without `\n` counts.
+struct Input<R> {
+    inner: R,
+    /// Bytes read and not yet handed out: `buf[pos..end]`.
+    buf: Vec<u8>,
+    pos: usize,
+    end: usize,
+    eof: bool,
+    /// Lines handed out so far (the number of the last one).
+    line: usize,
+    /// Bytes read from `inner` per call when the buffer is empty ([`BLOCK_BYTES`]; smaller
+    /// in tests so that small inputs span many blocks).
+    block: usize,
 }
 
-impl Batch {
-    /// Reads the next lines of the section (items `first..`, at most [`BATCH`], fewer at the
-    /// section's end `n` or at a read error), skipping comments and blank lines.
-    fn fill<R: BufRead>(
-        &mut self,
-        rd: &mut LineReader<R>,
-        file: &str,
-        what: &str,
-        first: usize,
-        n: usize,
-    ) {
-        self.text.clear();
-        self.spans.clear();
-        self.first = first;
-        self.err = None;
-        while self.spans.len() < BATCH && first + self.spans.len() < n {
-            match rd.expect_line(file, what) {
-                Ok((ln, line)) => {
-                    if is_skippable(line) {
-                        continue;
-                    }
-                    let a = self.text.len();
-                    self.text.extend_from_slice(line);
-                    self.spans.push((ln, a, self.text.len()));
+/// Whole lines taken out of an [`Input`]: `text[range]`, ending with a line end unless the
+/// input ended without one.
+struct Block {
+    text: Vec<u8>,
+    range: std::ops::Range<usize>,
+}
+
+impl<R: std::io::Read> Input<R> {
+    fn new(inner: R, block: usize) -> Self {
+        Input {
+            inner,
+            buf: Vec::new(),
+            pos: 0,
+            end: 0,
+            eof: false,
+            line: 0,
+            block,
+        }
+    }
+
+    /// Reads more bytes (at least one unless at the end): moves the unread bytes to the
+    /// front, makes room for `block` more and reads into it.
+    fn read_more(&mut self, file: &str) -> Result<()> {
+        if self.pos > 0 {
+            self.buf.copy_within(self.pos..self.end, 0);
+            self.end -= self.pos;
+            self.pos = 0;
+        }
+        if self.buf.len() < self.end + self.block {
+            self.buf.resize(self.end + self.block, 0);
+        }
+        loop {
+            match self.inner.read(&mut self.buf[self.end..]) {
+                Ok(0) => {
+                    self.eof = true;
+                    return Ok(());
                 }
-                Err(e) => {
-                    self.err = Some(e);
-                    break;
+                Ok(k) => {
+                    self.end += k;
+                    return Ok(());
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(error) => {
+                    return Err(Error::Io {
+                        file: file.to_string(),
+                        error,
+                    });
                 }
             }
         }
     }
-}
 
-/// Reads the `n` item lines of a section: lines are read sequentially by batches, each batch
-/// parsed in parallel (`parse(line number, text, item index)`) while the next batch is read
-/// (rayon::join), and the results applied in line order (`apply(item, line number)`), so the
-/// result and the first error reported are those of a sequential read.
-fn read_section<R, T, P, A>(
-    cx: &Ctx<'_>,
-    rd: &mut LineReader<R>,
-    n: usize,
-    what: &str,
-    parse: P,
-    mut apply: A,
-) -> Result<()>
-where
-    R: BufRead + Send,
-    T: Send,
-    P: Fn(usize, &[u8], usize) -> Result<T> + Sync,
-    A: FnMut(T, usize),
-{
-    let (mut cur, mut next) = (Batch::default(), Batch::default());
-    let mut parsed: Vec<Result<T>> = Vec::new();
-    cur.fill(rd, cx.file, what, 0, n);
-    loop {
-        let read = cur.first + cur.spans.len();
-        let more = cur.err.is_none() && read < n;
-        let parse_cur = |out: &mut Vec<Result<T>>| {
-            cur.spans
-                .par_iter()
-                .enumerate()
-                .map(|(k, &(ln, a, b))| parse(ln, &cur.text[a..b], cur.first + k))
-                .collect_into_vec(out);
+    /// The next line (number, text without the line end), or `None` at the end.
+    fn next_line(&mut self, file: &str) -> Result<Option<(usize, &[u8])>> {
+        let mut scanned = 0;
+        let (a, b) = loop {
+            if let Some(k) = self.buf[self.pos + scanned..self.end]
+                .iter()
+                .position(|&c| c == b'\n')
+            {
+                let nl = self.pos + scanned + k;
+                let a = self.pos;
+                self.pos = nl + 1;
+                break (a, nl);
+            }
+            if self.eof {
+                if self.pos == self.end {
+                    return Ok(None);
+                }
+                let a = self.pos;
+                self.pos = self.end;
+                break (a, self.end);
+            }
+            scanned = self.end - self.pos;
+            self.read_more(file)?;
         };
-        if more {
-            rayon::join(
-                || next.fill(rd, cx.file, what, read, n),
-                || parse_cur(&mut parsed),
-            );
-        } else {
-            parse_cur(&mut parsed);
+        self.line += 1;
+        Ok(Some((self.line, trim_line_end(&self.buf[a..b]))))
+    }
+
+    /// The next line, or a [`Error::Truncated`] naming `what`.
+    fn expect_line(&mut self, file: &str, what: &str) -> Result<(usize, &[u8])> {
+        let at = Location::Line(self.line + 1);
+        self.next_line(file)?.ok_or_else(|| Error::Truncated {
+            file: file.to_string(),
+            at,
+            what: what.to_string(),
+        })
+    }
+
+    /// Takes the next block of whole lines (at least `block` bytes unless the input ends
+    /// first; empty at the end), leaving `spare` as the buffer. Lines are not counted here:
+    /// the caller adds the lines it uses to [`Input::line`] and gives back the rest with
+    /// [`Input::unread`].
+    fn take_block(&mut self, file: &str, spare: Vec<u8>) -> Result<Block> {
+        let mut searched = self.pos;
+        let cut = loop {
+            if self.end - self.pos >= self.block || self.eof {
+                if let Some(k) = self.buf[searched..self.end]
+                    .iter()
+                    .rposition(|&c| c == b'\n')
+                {
+                    break searched + k + 1;
+                }
+                if self.eof {
+                    break self.end;
+                }
+                // A line longer than a block: read on until its end.
+                searched = self.end;
+            }
+            let before = self.pos;
+            self.read_more(file)?;
+            searched -= before;
+        };
+        let text = std::mem::replace(&mut self.buf, spare);
+        let tail = self.end - cut;
+        if self.buf.len() < tail {
+            self.buf.resize(tail, 0);
         }
-        for (r, &(ln, _, _)) in parsed.drain(..).zip(&cur.spans) {
-            apply(r?, ln);
+        self.buf[..tail].copy_from_slice(&text[cut..self.end]);
+        let range = self.pos..cut;
+        self.end = tail;
+        self.pos = 0;
+        Ok(Block { text, range })
+    }
+
+    /// Puts `bytes` back in front of the unread input.
+    fn unread(&mut self, bytes: &[u8]) {
+        if bytes.is_empty() {
+            return;
         }
-        if let Some(e) = cur.err.take() {
-            return Err(e);
-        }
-        if !more {
-            return Ok(());
-        }
-        std::mem::swap(&mut cur, &mut next);
+        let mut b = Vec::with_capacity(bytes.len() + self.end - self.pos + self.block);
+        b.extend_from_slice(bytes);
+        b.extend_from_slice(&self.buf[self.pos..self.end]);
+        self.end = b.len();
+        self.pos = 0;
+        self.buf = b;
     }
 }
 
-/// Reads `n` element lines into `set` ([`read_section`]).
-fn read_elements<R: BufRead + Send>(
+/// A line without its `\n` and the `\r`s before it.
+#[inline]
+fn trim_line_end(mut l: &[u8]) -> &[u8] {
+    while let [rest @ .., b'\n' | b'\r'] = l {
+        l = rest;
+    }
+    l
+}
+
+/// What one task made of one piece of a block.
+struct Piece<C> {
+    /// The items parsed, in line order, up to the first error or the item limit.
+    items: C,
+    /// Number of items in `items`.
+    n_items: usize,
+    /// Local indices (0-based, within the piece) of the comment and blank lines skipped.
+    skipped: Vec<usize>,
+    /// Lines in the piece (all of them when it was parsed to its end).
+    lines: usize,
+    /// The first line that failed: its local index and its text (`text[a..b]` of the block).
+    failed: Option<(usize, usize, usize)>,
+}
+
+/// Local line index of the `k`-th item of a piece whose skipped lines are `skipped`.
+fn item_line(skipped: &[usize], k: usize) -> usize {
+    let mut l = k;
+    for &s in skipped {
+        if s > l {
+            break;
+        }
+        l += 1;
+    }
+    l
+}
+
+/// Parses the lines of `text[a..b]` (whole lines) by `parse` (with dummy line and item
+/// numbers) and `push`es the items into a new collection (`new(bytes)`), up to `limit`
+/// items or the first error.
+fn parse_piece<T, C, P, N, U>(
+    text: &[u8],
+    (a, b): (usize, usize),
+    limit: usize,
+    parse: &P,
+    new: &N,
+    push: &U,
+) -> Piece<C>
+where
+    P: Fn(usize, &[u8], usize) -> Result<T>,
+    N: Fn(usize) -> C,
+    U: Fn(&mut C, T, usize),
+{
+    let mut p = Piece {
+        items: new(b - a),
+        n_items: 0,
+        skipped: Vec::new(),
+        lines: 0,
+        failed: None,
+    };
+    let mut s = a;
+    while s < b && p.n_items < limit {
+        let e = text[s..b]
+            .iter()
+            .position(|&c| c == b'\n')
+            .map_or(b, |k| s + k);
+        let line = trim_line_end(&text[s..e]);
+        if is_skippable(line) {
+            p.skipped.push(p.lines);
+        } else {
+            match parse(0, line, 0) {
+                Ok(t) => {
+                    push(&mut p.items, t, p.n_items);
+                    p.n_items += 1;
+                }
+                Err(_) => {
+                    p.failed = Some((p.lines, s, e));
+                    return p;
+                }
+            }
+        }
+        p.lines += 1;
+        s = e + 1;
+    }
+    p
+}
+
+/// Splits `range` of `text` into pieces of about `piece` bytes ending at line ends.
+fn split_pieces(text: &[u8], range: std::ops::Range<usize>, piece: usize) -> Vec<(usize, usize)> {
+    let mut out = Vec::with_capacity(range.len() / piece.max(1) + 1);
+    let mut a = range.start;
+    while a < range.end {
+        let mut b = (a + piece).min(range.end);
+        if b < range.end {
+            b = text[b..range.end]
+                .iter()
+                .position(|&c| c == b'\n')
+                .map_or(range.end, |k| b + k + 1);
+        }
+        out.push((a, b));
+        a = b;
+    }
+    out
+}
+
+/// Reads the `n` item lines of a section, skipping comment and blank lines: the input is
+/// taken by blocks of whole lines, each block cut into pieces parsed in parallel
+/// (`parse(line number, text, item index)`, each item `push`ed into its piece's collection
+/// made by `new(piece bytes)`) while the next block is read (rayon::join); the pieces are
+/// then applied in line order (`apply(collection, items before it, line number of its k-th
+/// item)`), and the lines after the section's last item are given back to the input. The
+/// result and the first error reported are those of a sequential line-by-line read, for any
+/// thread count: a piece stops at its first failing line (or at the number of items still
+/// wanted), and that line is parsed again with its line and item numbers once the pieces
+/// before it are applied.
+#[allow(clippy::too_many_arguments)]
+fn read_section<R, T, C, P, N, U, A>(
     cx: &Ctx<'_>,
-    rd: &mut LineReader<R>,
+    inp: &mut Input<R>,
+    n: usize,
+    what: &str,
+    parse: P,
+    new: N,
+    push: U,
+    mut apply: A,
+) -> Result<()>
+where
+    R: std::io::Read + Send,
+    C: Send,
+    P: Fn(usize, &[u8], usize) -> Result<T> + Sync,
+    N: Fn(usize) -> C + Sync,
+    U: Fn(&mut C, T, usize) + Sync,
+    A: FnMut(C, usize, &dyn Fn(usize) -> usize),
+{
+    if n == 0 {
+        return Ok(());
+    }
+    let piece_bytes = inp.block.div_ceil(BLOCK_BYTES / PIECE_BYTES).max(1);
+    let mut done = 0;
+    let mut block = inp.take_block(cx.file, Vec::new())?;
+    let mut spare = Vec::new();
+    loop {
+        if block.range.is_empty() {
+            return Err(Error::Truncated {
+                file: cx.file.to_string(),
+                at: Location::Line(inp.line + 1),
+                what: what.to_string(),
+            });
+        }
+        let limit = n - done;
+        // Read the next block alongside unless this one may well end the section (fewer
+        // than 16 bytes per remaining line).
+        let ahead = limit.saturating_mul(16) > block.range.len() && !inp.eof;
+        let pieces_at = split_pieces(&block.text, block.range.clone(), piece_bytes);
+        let parse_block = || {
+            pieces_at
+                .par_iter()
+                .map(|&ab| parse_piece(&block.text, ab, limit, &parse, &new, &push))
+                .collect::<Vec<_>>()
+        };
+        let (next, pieces) = if ahead {
+            let buf = std::mem::take(&mut spare);
+            let (next, pieces) = rayon::join(|| inp.take_block(cx.file, buf), parse_block);
+            (Some(next), pieces)
+        } else {
+            (None, parse_block())
+        };
+        for (p, &(a, _)) in pieces.into_iter().zip(&pieces_at) {
+            let base = inp.line + 1;
+            let n_items = p.n_items;
+            apply(p.items, done, &|k| base + item_line(&p.skipped, k));
+            done += n_items;
+            if done == n {
+                // Give back what follows the last item's line (and the block read ahead).
+                let used = item_line(&p.skipped, n_items - 1) + 1;
+                let mut s = a;
+                for _ in 0..used {
+                    s += block.text[s..block.range.end]
+                        .iter()
+                        .position(|&c| c == b'\n')
+                        .map_or(block.range.end - s, |k| k + 1);
+                }
+                inp.line += used;
+                let rest = &block.text[s..block.range.end];
+                match next {
+                    Some(Ok(nb)) => {
+                        let mut r = rest.to_vec();
+                        r.extend_from_slice(&nb.text[nb.range]);
+                        inp.unread(&r);
+                    }
+                    Some(Err(_)) | None => inp.unread(rest),
+                }
+                return Ok(());
+            }
+            if let Some((k, a, b)) = p.failed {
+                let ln = base + k;
+                let line = trim_line_end(&block.text[a..b]);
+                return Err(match parse(ln, line, done) {
+                    Err(e) => e,
+                    Ok(_) => cx.err(ln, format!("{what}: line parsed differently on a retry")),
+                });
+            }
+            inp.line += p.lines;
+        }
+        spare = std::mem::replace(
+            &mut block,
+            match next {
+                Some(r) => r?,
+                None => inp.take_block(cx.file, spare)?,
+            },
+        )
+        .text;
+    }
+}
+
+/// The elements of one piece of a section and its largest node (node, local item index).
+struct ElementPiece {
+    set: Elements,
+    max: Option<(u32, usize)>,
+    /// Bytes of the piece (a hint for the first reservation).
+    bytes: usize,
+}
+
+/// Reads `n` element lines into `set` ([`read_section`]).
+fn read_elements<R: std::io::Read + Send>(
+    cx: &Ctx<'_>,
+    rd: &mut Input<R>,
     n: usize,
     dim: u8,
     set: &mut Elements,
     max: &mut MaxRef,
     section: &str,
 ) -> Result<()> {
-    let mut done = 0;
     read_section(
         cx,
         rd,
         n,
         section,
         |ln, line, _| parse_element(cx, ln, line, dim),
-        |(kind, nodes), ln| {
-            let g = set.group_mut(kind);
+        |bytes| ElementPiece {
+            set: Elements::new(),
+            max: None,
+            bytes,
+        },
+        |piece, (kind, nodes), k| {
+            let nn = kind.n_nodes();
+            let g = piece.set.group_mut(kind);
             if g.nodes.capacity() == 0 {
-                reserve_capped(&mut g.nodes, (n - done).saturating_mul(kind.n_nodes()));
+                // About 4 bytes per number on a line.
+                g.nodes.reserve(piece.bytes / (4 * (nn + 1)) * nn);
             }
-            for &x in &nodes[..kind.n_nodes()] {
-                max.see(u64::from(x), ln);
+            extend_nodes(&mut g.nodes, &nodes, nn);
+            let top = nodes[..nn].iter().copied().max().unwrap_or(0);
+            if piece.max.is_none_or(|(m, _)| top >= m) {
+                piece.max = Some((top, k));
             }
-            g.nodes.extend_from_slice(&nodes[..kind.n_nodes()]);
-            done += 1;
+        },
+        |piece, done, line_of| {
+            for g in piece.set.groups() {
+                let all = set.group_mut(g.kind);
+                if all.nodes.capacity() == 0 {
+                    reserve_capped(&mut all.nodes, (n - done).saturating_mul(g.kind.n_nodes()));
+                }
+                all.nodes.extend_from_slice(&g.nodes);
+            }
+            if let Some((node, k)) = piece.max {
+                max.see(u64::from(node), line_of(k));
+            }
         },
     )
+}
+
+/// Appends the first `nn` of `nodes` (copies of a size known at compile time for the
+/// element kinds).
+#[inline]
+fn extend_nodes(v: &mut Vec<u32>, nodes: &[u32; 8], nn: usize) {
+    match nn {
+        2 => v.extend_from_slice(&nodes[..2]),
+        3 => v.extend_from_slice(&nodes[..3]),
+        4 => v.extend_from_slice(&nodes[..4]),
+        5 => v.extend_from_slice(&nodes[..5]),
+        6 => v.extend_from_slice(&nodes[..6]),
+        8 => v.extend_from_slice(nodes),
+        _ => v.extend_from_slice(&nodes[..nn]),
+    }
 }
 
 /// Parses one point line of node `node`: `dim` finite coordinates, optionally the node's
@@ -360,9 +679,9 @@ fn parse_point(cx: &Ctx<'_>, ln: usize, line: &[u8], dim: u8, node: usize) -> Re
 }
 
 /// Reads `n` point lines into `coords` ([`read_section`]).
-fn read_points<R: BufRead + Send>(
+fn read_points<R: std::io::Read + Send>(
     cx: &Ctx<'_>,
-    rd: &mut LineReader<R>,
+    rd: &mut Input<R>,
     n: usize,
     dim: u8,
     coords: &mut Vec<[f64; 3]>,
@@ -374,12 +693,16 @@ fn read_points<R: BufRead + Send>(
         n,
         "NPOIN",
         |ln, line, node| parse_point(cx, ln, line, dim, node),
-        |p, _| coords.push(p),
+        // About 32 bytes per line at least (3 coordinates in full precision take ~60).
+        |bytes| Vec::with_capacity(bytes / 32),
+        |piece: &mut Vec<[f64; 3]>, p, _| piece.push(p),
+        |piece, _, _| coords.extend_from_slice(&piece),
     )
 }
 
-/// Reads an SU2 grid from `r`; `file` names the input in errors (`Send`: the next batch of
-/// lines is read on one thread while the last one is parsed on the others).
+/// Reads an SU2 grid from `r`; `file` names the input in errors (`Send`: the next block of
+/// lines is read on one thread while the last one is parsed on the others). The input is
+/// read in slices of 4 MiB (a `BufReader` passes such reads straight through).
 ///
 /// ```
 /// let txt = "NDIME= 2\nNELEM= 1\n5 0 1 2 0\nNPOIN= 3\n0 0 0\n1 0 1\n0 1 2\n\
@@ -389,9 +712,14 @@ fn read_points<R: BufRead + Send>(
 /// assert_eq!(m.markers[0].name, "wall");
 /// ```
 pub fn read<R: BufRead + Send>(r: R, file: &Path) -> Result<Mesh> {
+    read_by_blocks(r, file, BLOCK_BYTES)
+}
+
+/// [`read`] taking the input by blocks of about `block` bytes.
+fn read_by_blocks<R: std::io::Read + Send>(r: R, file: &Path, block: usize) -> Result<Mesh> {
     let file = file.display().to_string();
     let cx = Ctx { file: &file };
-    let mut rd = LineReader::new(r);
+    let mut rd = Input::new(r, block);
     let mut mesh = Mesh::new(0);
     let mut dim: Option<u8> = None;
     let (mut seen_elem, mut seen_poin, mut seen_mark) = (false, false, false);
@@ -574,26 +902,44 @@ where
     F: Fn(usize, &mut Vec<u8>) + Sync,
 {
     let blocks = n.div_ceil(WRITE_BLOCK);
-    let mut texts: Vec<Vec<u8>> = Vec::new();
-    for first in (0..blocks).step_by(WRITE_BATCH) {
+    // Formats blocks `first..` of one batch into `texts` (its buffers reused).
+    let format = |first: usize, texts: &mut Vec<Vec<u8>>| {
         let last = (first + WRITE_BATCH).min(blocks);
-        (first..last)
-            .into_par_iter()
-            .map(|b| {
-                let lo = b * WRITE_BLOCK;
-                let hi = (lo + WRITE_BLOCK).min(n);
-                let mut out = Vec::with_capacity((hi - lo) * 48);
-                for i in lo..hi {
-                    line(i, &mut out);
-                }
-                out
-            })
-            .collect_into_vec(&mut texts);
-        for t in &texts {
-            w.write_all(t)?;
-        }
+        texts.resize_with(last - first, Vec::new);
+        texts.par_iter_mut().enumerate().for_each(|(k, out)| {
+            let lo = (first + k) * WRITE_BLOCK;
+            let hi = (lo + WRITE_BLOCK).min(n);
+            out.clear();
+            out.reserve((hi - lo) * 48);
+            for i in lo..hi {
+                line(i, out);
+            }
+        });
+    };
+    let (mut cur, mut next): (Vec<Vec<u8>>, Vec<Vec<u8>>) = (Vec::new(), Vec::new());
+    if blocks == 0 {
+        return Ok(());
     }
-    Ok(())
+    format(0, &mut cur);
+    let mut first = 0;
+    loop {
+        first += WRITE_BATCH;
+        // Write this batch on this thread while the next one is formatted on the others.
+        // (`in_place_scope`: the writer stays on this thread, so it need not be `Send`.)
+        let written = if first < blocks {
+            rayon::in_place_scope(|s| {
+                s.spawn(|_| format(first, &mut next));
+                cur.iter().try_for_each(|t| w.write_all(t))
+            })
+        } else {
+            cur.iter().try_for_each(|t| w.write_all(t))
+        };
+        written?;
+        if first >= blocks {
+            return Ok(());
+        }
+        std::mem::swap(&mut cur, &mut next);
+    }
 }
 
 /// Writes the element lines of `set` (code, nodes, and with `ids` the element's index).
@@ -623,8 +969,9 @@ fn write_elements<W: Write + ?Sized>(set: &Elements, ids: bool, w: &mut W) -> st
 /// round-trip form, so reading back gives the same bits. Element ids follow the canonical
 /// kind order of [`Elements`]. [`Mesh::su2_extra`] is appended verbatim.
 ///
-/// The lines are formatted in parallel by blocks and written in order (the same bytes for
-/// any thread count).
+/// The lines are formatted in parallel by blocks and written in order, a batch of blocks
+/// being written on the calling thread while the next is formatted (the same bytes for any
+/// thread count).
 ///
 /// A 2-D grid whose nodes do not all have z = 0 is refused (SU2 2-D files carry x and y
 /// only), rather than silently flattened.
@@ -683,12 +1030,12 @@ mod tests {
     #[test]
     fn parallel_write_and_read_span_several_blocks_and_batches() {
         // 162 000 tetrahedra (more than WRITE_BLOCK × WRITE_BATCH lines), 29 791 points
-        // (more than one read batch), irrational coordinates.
+        // (the whole file is more than one read block), irrational coordinates.
         let mut m = crate::generate::box_tets(30, 30, 30, [0.0; 3], [1.0, 0.7, 1.3]);
         for (i, p) in m.coords.iter_mut().enumerate() {
             p[0] += 1e-3 * (i as f64).sin();
         }
-        assert!(m.cells.len() > WRITE_BLOCK * WRITE_BATCH && m.n_nodes() > BATCH);
+        assert!(m.cells.len() > WRITE_BLOCK * WRITE_BATCH);
         let text = |threads: usize| {
             testkit::with_threads(threads, || {
                 let mut out = Vec::new();
@@ -712,9 +1059,17 @@ mod tests {
         }
         let head = format!("NDIME= 3\nNELEM= {}\n", m.cells.len());
         assert_eq!(&one[head.len()..head.len() + seq.len()], &seq[..]);
+        assert!(one.len() > BLOCK_BYTES);
         let back = read(&one[..], "t.su2".as_ref()).unwrap();
         assert_eq!(back.coords, m.coords);
         assert_eq!(back.cells, m.cells);
+        // Small blocks (many pieces and blocks per section), any thread count.
+        for threads in [1, 3] {
+            let small = testkit::with_threads(threads, || {
+                read_by_blocks(&one[..], "t.su2".as_ref(), 1000).unwrap()
+            });
+            assert_eq!(small, back);
+        }
         // An error in a later read batch names the node and line of a sequential read.
         let mut bad = String::from_utf8(one).unwrap();
         let target = format!("\t{}\n", 20_000);
@@ -730,5 +1085,103 @@ mod tests {
             e.contains(&format!("line {line_no}")) && e.contains("node 20000"),
             "{e}"
         );
+    }
+
+    /// A small grid's SU2 text with comment and blank lines inserted after the lines in
+    /// `at` (indices modulo the line count), optionally with CRLF line ends.
+    fn text_with_noise(at: &[usize], crlf: bool) -> Vec<u8> {
+        let mut m = crate::generate::box_tets(3, 2, 2, [0.0; 3], [1.0, 0.3, 0.7]);
+        m.su2_extra = "FFD_NBOX= 0\nFFD_NLEVEL= 0\n".into();
+        let mut t = Vec::new();
+        write(&m, &mut t).unwrap();
+        let lines: Vec<&[u8]> = t.split(|&c| c == b'\n').collect();
+        let n = lines.len() - 1;
+        let mut out = Vec::new();
+        for (k, l) in lines[..n].iter().enumerate() {
+            out.extend_from_slice(l);
+            out.extend_from_slice(if crlf { b"\r\n" } else { b"\n" });
+            for (j, &a) in at.iter().enumerate() {
+                if a % n == k {
+                    out.extend_from_slice(if j % 2 == 0 { b"% note\n" } else { b" \t \n" });
+                }
+            }
+        }
+        out
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+
+        /// Reading by tiny blocks (many blocks and pieces per section, sections ending
+        /// inside blocks, lines given back) gives the grid, or the first error, of a read in
+        /// one block and one piece (line by line), for any thread count.
+        #[test]
+        fn tiny_blocks_read_like_one_block(
+            at in proptest::collection::vec(0usize..400, 0..6),
+            crlf: bool,
+            block in 1usize..400,
+            threads in 1usize..4,
+            bad in proptest::option::of((0usize..400, 0usize..40, 0usize..4)),
+        ) {
+            let mut text = text_with_noise(&at, crlf);
+            if let Some((line, col, what)) = bad {
+                // Damage one character of one line.
+                let starts: Vec<usize> = std::iter::once(0)
+                    .chain(text.iter().enumerate().filter(|(_, c)| **c == b'\n').map(|(i, _)| i + 1))
+                    .filter(|&i| i < text.len())
+                    .collect();
+                let a = starts[line % starts.len()];
+                let len = text[a..].iter().position(|&c| c == b'\n').unwrap_or(text.len() - a);
+                if len > 0 {
+                    text[a + col % len] = [b'x', b'-', b' ', b'9'][what];
+                }
+            }
+            // (One block, one piece: the text is ~4 kB.)
+            let whole = read_by_blocks(&text[..], "t.su2".as_ref(), 1 << 20);
+            let small = testkit::with_threads(threads, || {
+                read_by_blocks(&text[..], "t.su2".as_ref(), block)
+            });
+            match (whole, small) {
+                (Ok(a), Ok(b)) => proptest::prop_assert_eq!(a, b),
+                (Err(a), Err(b)) => proptest::prop_assert_eq!(a.to_string(), b.to_string()),
+                (a, b) => proptest::prop_assert!(false, "{:?} vs {:?}", a.map(|_| ()), b.map(|_| ())),
+            }
+        }
+    }
+
+    #[test]
+    fn noise_lines_and_crlf_keep_the_grid_and_line_numbers() {
+        let clean = read(&text_with_noise(&[], false)[..], "t.su2".as_ref()).unwrap();
+        let noisy = text_with_noise(&[0, 5, 40, 41, 100, 150], true);
+        for block in [7, 64, 1 << 20] {
+            let m = read_by_blocks(&noisy[..], "t.su2".as_ref(), block).unwrap();
+            assert_eq!(m.coords, clean.coords);
+            assert_eq!(m.cells, clean.cells);
+            assert_eq!(m.markers, clean.markers);
+            assert_eq!(m.su2_extra, clean.su2_extra);
+        }
+        // An error names the line counted here, comments and blank lines included.
+        let mut bad = noisy.clone();
+        let npoin = bad.windows(6).position(|w| w == b"NPOIN=").unwrap();
+        let third = npoin
+            + bad[npoin..]
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| **c == b'\n')
+                .nth(2)
+                .unwrap()
+                .0
+            + 1;
+        bad[third] = b'#';
+        let line_no = bad[..third].iter().filter(|&&c| c == b'\n').count() + 1;
+        for block in [7, 64, 1 << 20] {
+            let e = read_by_blocks(&bad[..], "t.su2".as_ref(), block)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with(&format!("t.su2: line {line_no}: node ")),
+                "{e}"
+            );
+        }
     }
 }
