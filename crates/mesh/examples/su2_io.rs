@@ -9,7 +9,7 @@
 //! clock ticks of 10 ms); at the end the peak resident memory (VmHWM). Without `OUT.su2` the
 //! output goes to a sink (formatting only). The fingerprints are `DefaultHasher` (SipHash with
 //! fixed keys) values of the coordinate bits, the connectivity, the markers, the adjacency
-//! rows and the written bytes.
+//! rows and the written bytes. `SU2_IO_STEPS=read` (or `adjacency`) stops after that step.
 
 use std::hash::{DefaultHasher, Hash, Hasher};
 use std::io::Write;
@@ -67,8 +67,17 @@ fn timed<T>(label: &str, f: impl FnOnce() -> T) -> T {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let input = Path::new(args.first().ok_or("usage: su2_io IN.su2 [OUT.su2]")?);
+    // SU2_IO_STEPS=read|adjacency|write: stop after that step (for instruction counts of
+    // a step under `valgrind --tool=cachegrind`, by differences).
+    let steps = std::env::var("SU2_IO_STEPS").unwrap_or_default();
     let m = timed("read", || mesh::io::read_path(input))?;
+    if steps == "read" {
+        return Ok(());
+    }
     let adj = timed("adjacency", || mesh::Adjacency::build(&m));
+    if steps == "adjacency" {
+        return Ok(());
+    }
     let mut w = HashWriter(DefaultHasher::new(), 0);
     match args.get(1) {
         Some(out) => timed("write", || -> std::io::Result<()> {

@@ -1,11 +1,11 @@
 //! Node-to-node adjacency (the grid's edge graph) in compressed sparse row form.
 //!
 //! Built once, in parallel, without per-node heap allocation: a node-to-element table
-//! (element numbers across the kind groups, `u32`) is made by counting, prefix sum and a
-//! fill, the counting and the fill in parallel over node ranges (each range scans the whole
+//! (element number across the kind groups and local node in one `u32`) is made by counting,
+//! prefix sum and a fill, the counting and the fill in parallel over node ranges (each range scans the whole
 //! connectivity in element order, so each row lists its elements in increasing order
 //! whatever the split); then every node gathers the edge neighbours from its elements
-//! (through a per-kind table of local neighbours, at the node's positions in the element)
+//! (through a per-kind table of local neighbours)
 //! into a per-task scratch buffer, sorts and deduplicates them, and appends them to its
 //! block of nodes; the blocks are concatenated in order. The result is independent of the
 //! number of threads.
@@ -40,11 +40,12 @@ fn local_neighbours(kind: ElementKind, local: usize, out: &mut [u8; 4]) -> usize
     n
 }
 
-/// Node-to-element incidence: the elements of node `i` (numbered across the groups in
-/// order, increasing) are `elems[offsets[i]..offsets[i + 1]]`.
+/// Node-to-element incidence: for node `i`, `slots[offsets[i]..offsets[i + 1]]` holds its
+/// elements in increasing order (numbered across the groups in order), each with the node's
+/// position in it: `element << 3 | local`.
 struct Incidence {
     offsets: Vec<usize>,
-    elems: Vec<u32>,
+    slots: Vec<u32>,
     /// Number of the first element of each group.
     group_start: Vec<u32>,
 }
@@ -60,6 +61,11 @@ impl Incidence {
         (gi, (e - self.group_start[gi]) as usize)
     }
 }
+
+/// Most elements an element set may have for [`Adjacency::from_elements`] (the element
+/// number and the local node share a `u32` of the incidence table): 2^29, 536 M (a grid of
+/// that size would hold 8.6 GB of tetrahedron connectivity).
+pub const MAX_ELEMENTS: usize = 1 << 29;
 
 /// Node ranges of the parallel incidence passes: one per thread (each pass scans all the
 /// connectivity and handles the nodes of its range, so the result does not depend on the
@@ -78,16 +84,17 @@ fn node_ranges(n_nodes: usize) -> Vec<(usize, usize)> {
 /// increasing order).
 fn incidence(n_nodes: usize, cells: &Elements) -> Incidence {
     let ranges = node_ranges(n_nodes);
+    assert!(
+        cells.len() <= MAX_ELEMENTS,
+        "Adjacency: {} elements, at most {MAX_ELEMENTS} supported",
+        cells.len()
+    );
     let mut group_start = Vec::with_capacity(cells.groups().len());
-    let mut total = 0usize;
+    let mut total = 0;
     for g in cells.groups() {
-        group_start.push(u32::try_from(total).expect("fewer than 2^32 elements"));
+        group_start.push(total as u32);
         total += g.len();
     }
-    assert!(
-        u32::try_from(total).is_ok(),
-        "Adjacency: fewer than 2^32 elements"
-    );
     // counts[i + 1] = number of elements of node i.
     let mut counts = vec![0usize; n_nodes + 1];
     let mut rest = &mut counts[1..];
@@ -110,8 +117,8 @@ fn incidence(n_nodes: usize, cells: &Elements) -> Incidence {
         counts[i + 1] += counts[i];
     }
     let offsets = counts;
-    let mut elems = vec![0u32; offsets[n_nodes]];
-    let mut rest = &mut elems[..];
+    let mut slots = vec![0u32; offsets[n_nodes]];
+    let mut rest = &mut slots[..];
     let mut parts = Vec::with_capacity(ranges.len());
     for &(lo, hi) in &ranges {
         let (part, r) = rest.split_at_mut(offsets[hi] - offsets[lo]);
@@ -124,9 +131,10 @@ fn incidence(n_nodes: usize, cells: &Elements) -> Incidence {
         for (g, &first) in cells.groups().iter().zip(&group_start) {
             let nn = g.kind.n_nodes();
             for (e, conn) in g.nodes.chunks_exact(nn).enumerate() {
-                for &v in conn {
+                let slot = (first + e as u32) << 3;
+                for (local, &v) in conn.iter().enumerate() {
                     if let Some(c) = (v as usize).checked_sub(lo).and_then(|k| cursor.get_mut(k)) {
-                        part[*c] = first + e as u32;
+                        part[*c] = slot | local as u32;
                         *c += 1;
                     }
                 }
@@ -135,7 +143,7 @@ fn incidence(n_nodes: usize, cells: &Elements) -> Incidence {
     });
     Incidence {
         offsets,
-        elems,
+        slots,
         group_start,
     }
 }
@@ -167,26 +175,19 @@ fn gather(
     scratch.clear();
     let stamp = node as u32 + 1;
     let groups = cells.groups();
-    for &e in &inc.elems[inc.offsets[node]..inc.offsets[node + 1]] {
-        let (gi, elem) = inc.locate(e);
+    for &slot in &inc.slots[inc.offsets[node]..inc.offsets[node + 1]] {
+        let (gi, elem) = inc.locate(slot >> 3);
+        let local = (slot & 7) as usize;
         let g = &groups[gi];
         let nn = g.kind.n_nodes();
         let conn = &g.nodes[elem * nn..elem * nn + nn];
         let (loc, cnt) = &tables[gi];
-        // The node's local positions in the element (more than one only in a degenerate
-        // element, which is then listed once per position: its neighbours are the same).
-        for (local, _) in conn
-            .iter()
-            .enumerate()
-            .filter(|&(_, &x)| x as usize == node)
-        {
-            for &l in &loc[local][..usize::from(cnt[local])] {
-                let v = conn[usize::from(l)];
-                let s = &mut seen[v as usize];
-                if v as usize != node && *s != stamp {
-                    *s = stamp;
-                    scratch.push(v);
-                }
+        for &l in &loc[local][..usize::from(cnt[local])] {
+            let v = conn[usize::from(l)];
+            let s = &mut seen[v as usize];
+            if v as usize != node && *s != stamp {
+                *s = stamp;
+                scratch.push(v);
             }
         }
     }
@@ -212,6 +213,9 @@ impl Adjacency {
     }
 
     /// Builds the adjacency of any element set over `n_nodes` nodes.
+    ///
+    /// # Panics
+    /// With more than [`MAX_ELEMENTS`] elements.
     pub fn from_elements(n_nodes: usize, cells: &Elements) -> Self {
         let inc = incidence(n_nodes, cells);
         let tables: Vec<NeighbourTable> = cells
@@ -332,7 +336,7 @@ mod tests {
             cells.push(ElementKind::Prism, &h[..6], None);
             cells.push(ElementKind::Pyramid, &h[..5], None);
         }
-        // Degenerate elements (a node repeated) are listed once per position.
+        // Degenerate elements (a node repeated).
         cells.push(ElementKind::Tetra, &[5, 9, 5, 1000], None);
         cells.push(ElementKind::Prism, &[7, 7, 7, 3000, 3001, 3000], None);
         let a = Adjacency::from_elements(n, &cells);

@@ -17,9 +17,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Location, Result};
 use crate::grid::{ElementKind, Elements, Marker, Mesh};
-use crate::text::{
-    Tokens, parse_f64, parse_i64, parse_u64, push_f64, push_u64, reserve_capped, syntax,
-};
+use crate::text::{Tokens, parse_f64, parse_i64, parse_u64, push_f64, reserve_capped, syntax};
 
 /// Splits `KEY= value` (value trimmed); `None` when the line has no `=`.
 fn keyword(line: &[u8]) -> Option<(&[u8], &[u8])> {
@@ -60,38 +58,102 @@ impl Ctx<'_> {
     }
 }
 
-/// Scans a line of unsigned integers separated by spaces or tabs into `out`; `None` if the
-/// line holds anything else, more than `out.len()` numbers or a number above `u32::MAX`
-/// (the caller then re-reads it with full error reporting).
+/// The value of eight decimal digits given as byte values 0–9, the first (most
+/// significant) in the lowest byte: three multiplications combine pairs, quads, octets
+/// (exact integer arithmetic: the largest intermediate, 99 999 999 · 2^32, fits in 64 bits).
 #[inline]
-fn scan_uints(line: &[u8], out: &mut [u64; 10]) -> Option<usize> {
-    let mut n = 0;
-    let mut acc: u64 = 0;
-    let mut digits = 0u32;
-    for &c in line {
-        let d = c.wrapping_sub(b'0');
-        if d <= 9 {
-            acc = acc * 10 + u64::from(d);
-            digits += 1;
-            if digits > 10 {
-                return None;
+fn eight_digits(v: u64) -> u64 {
+    const MASK: u64 = 0x0000_00FF_0000_00FF;
+    const MUL1: u64 = 100 + (1_000_000 << 32);
+    const MUL2: u64 = 1 + (10_000 << 32);
+    // Byte pairs: 10 · d[2k] + d[2k + 1] in the even bytes.
+    let v = v.wrapping_mul(10).wrapping_add(v >> 8);
+    ((v & MASK)
+        .wrapping_mul(MUL1)
+        .wrapping_add(((v >> 16) & MASK).wrapping_mul(MUL2)))
+        >> 32
+}
+
+/// Scans unsigned integers separated by spaces, tabs or `\r` from the start of `s` to the
+/// first `\n` (or the end) into `out`: the count of numbers and the position of that line
+/// end. `None` if the line holds anything else, more than `out.len()` numbers or a number of
+/// more than 10 digits (the caller then re-reads it with full error reporting). Up to eight
+/// digits of a number are taken at once when eight bytes are left ([`eight_digits`]).
+#[inline]
+fn scan_uints(s: &[u8], out: &mut [u64; 10]) -> Option<(usize, usize)> {
+    const LOW7: u64 = 0x7F7F_7F7F_7F7F_7F7F;
+    const HIGH: u64 = 0x8080_8080_8080_8080;
+    const ZEROS: u64 = 0x3030_3030_3030_3030;
+    let is_sep = |c: u8| c == b'\t' || c == b' ' || c == b'\r';
+    let (len, mut i, mut n) = (s.len(), 0, 0);
+    loop {
+        while i < len && is_sep(s[i]) {
+            i += 1;
+        }
+        if i == len || s[i] == b'\n' {
+            return Some((n, i));
+        }
+        let start = i;
+        let mut acc: u64 = 0;
+        if let Some(chunk) = s.get(i..i + 8).and_then(|c| <[u8; 8]>::try_from(c).ok()) {
+            // Byte j of t is d_j = s[i + j] - '0' for a digit; the high bit of byte j of
+            // `non` is set iff s[i + j] is not a digit (no carry crosses a byte: 0x7F +
+            // 0x76 < 0x100).
+            let t = u64::from_le_bytes(chunk) ^ ZEROS;
+            let non = (((t & LOW7) + 0x7676_7676_7676_7676) | t) & HIGH;
+            let run = (non.trailing_zeros() / 8) as usize;
+            if run > 0 {
+                // Keep the run's bytes, shifted up: the bytes below are leading zeros.
+                acc = eight_digits(t << (8 * (8 - run)));
+                i += run;
             }
-        } else if c == b' ' || c == b'\t' || c == b'\r' {
-            if digits > 0 {
-                *out.get_mut(n)? = acc;
-                n += 1;
-                acc = 0;
-                digits = 0;
+        }
+        while i < len {
+            let d = s[i].wrapping_sub(b'0');
+            if d > 9 {
+                break;
             }
-        } else {
+            // (Wrapping: a number of more than 10 digits is refused below.)
+            acc = acc.wrapping_mul(10).wrapping_add(u64::from(d));
+            i += 1;
+        }
+        if i == start || i - start > 10 || (i < len && !is_sep(s[i]) && s[i] != b'\n') {
             return None;
         }
-    }
-    if digits > 0 {
         *out.get_mut(n)? = acc;
         n += 1;
     }
-    Some(n)
+}
+
+/// The element of a line scanned by [`scan_uints`] (`k` numbers in `v`) if it is a
+/// well-formed `want_dim`-D element line: code, nodes below `u32::MAX`, optionally an index.
+#[inline]
+fn plain_element(v: &[u64; 10], k: usize, want_dim: u8) -> Option<(ElementKind, [u32; 8])> {
+    if k == 0 {
+        return None;
+    }
+    let kind = ElementKind::from_vtk_code(i64::try_from(v[0]).ok()?)?;
+    let nn = kind.n_nodes();
+    if kind.dim() != want_dim || !(k == nn + 1 || k == nn + 2) {
+        return None;
+    }
+    let mut nodes = [0u32; 8];
+    for (o, &x) in nodes.iter_mut().zip(&v[1..=nn]) {
+        if x >= u64::from(u32::MAX) {
+            return None;
+        }
+        *o = x as u32;
+    }
+    Some((kind, nodes))
+}
+
+/// The fast path of the element reader: a well-formed element line at the start of `s`,
+/// and the position of its line end.
+#[inline]
+fn fast_element(s: &[u8], want_dim: u8) -> Option<((ElementKind, [u32; 8]), usize)> {
+    let mut v = [0u64; 10];
+    let (k, end) = scan_uints(s, &mut v)?;
+    Some((plain_element(&v, k, want_dim)?, end))
 }
 
 /// Parses one element line: the code, `n_nodes` node indices, optionally the element index
@@ -102,23 +164,11 @@ fn parse_element(
     line: &[u8],
     want_dim: u8,
 ) -> Result<(ElementKind, [u32; 8])> {
-    let mut nodes = [0u32; 8];
     // Fast path for well-formed lines; anything unusual falls through to the checked parse.
-    let mut v = [0u64; 10];
-    if let Some(k) = scan_uints(line, &mut v)
-        && k >= 1
-        && let Some(kind) = ElementKind::from_vtk_code(v[0] as i64)
-        && kind.dim() == want_dim
-        && (k == kind.n_nodes() + 1 || k == kind.n_nodes() + 2)
-        && v[1..=kind.n_nodes()]
-            .iter()
-            .all(|&x| x < u64::from(u32::MAX))
-    {
-        for (o, &x) in nodes.iter_mut().zip(&v[1..=kind.n_nodes()]) {
-            *o = x as u32;
-        }
-        return Ok((kind, nodes));
+    if let Some((e, _)) = fast_element(line, want_dim) {
+        return Ok(e);
     }
+    let mut nodes = [0u32; 8];
     let mut tok = Tokens::new(line);
     let code_tok = tok.next().ok_or_else(|| cx.err(ln, "empty element line"))?;
     let code = parse_i64(code_tok).ok_or_else(|| {
@@ -277,10 +327,7 @@ impl<R: std::io::Read> Input<R> {
     fn next_line(&mut self, file: &str) -> Result<Option<(usize, &[u8])>> {
         let mut scanned = 0;
         let (a, b) = loop {
-            if let Some(k) = self.buf[self.pos + scanned..self.end]
-                .iter()
-                .position(|&c| c == b'\n')
-            {
+            if let Some(k) = find_nl(&self.buf[self.pos + scanned..self.end]) {
                 let nl = self.pos + scanned + k;
                 let a = self.pos;
                 self.pos = nl + 1;
@@ -361,6 +408,15 @@ impl<R: std::io::Read> Input<R> {
     }
 }
 
+/// Position of the first `\n` in `s` (by the standard library's word-at-a-time `memchr`,
+/// through `BufRead::skip_until` on a slice).
+#[inline]
+fn find_nl(s: &[u8]) -> Option<usize> {
+    let mut r = s;
+    let k = BufRead::skip_until(&mut r, b'\n').unwrap_or(0);
+    (k > 0 && s[k - 1] == b'\n').then(|| k - 1)
+}
+
 /// A line without its `\n` and the `\r`s before it.
 #[inline]
 fn trim_line_end(mut l: &[u8]) -> &[u8] {
@@ -396,18 +452,20 @@ fn item_line(skipped: &[usize], k: usize) -> usize {
     l
 }
 
-/// Parses the lines of `text[a..b]` (whole lines) by `parse` (with dummy line and item
-/// numbers) and `push`es the items into a new collection (`new(bytes)`), up to `limit`
+/// Parses the lines of `text[a..b]` (whole lines) by `fast` (a line at the start of a
+/// slice: the item and the position of the line end, `None` to leave the line to the rest)
+/// or else by `parse` (with dummy line and item numbers) and `push`es the items into a new collection (`new(bytes)`), up to `limit`
 /// items or the first error.
-fn parse_piece<T, C, P, N, U>(
+fn parse_piece<T, C, F, P, N, U>(
     text: &[u8],
     (a, b): (usize, usize),
     limit: usize,
-    parse: &P,
+    (fast, parse): (&F, &P),
     new: &N,
     push: &U,
 ) -> Piece<C>
 where
+    F: Fn(&[u8]) -> Option<(T, usize)>,
     P: Fn(usize, &[u8], usize) -> Result<T>,
     N: Fn(usize) -> C,
     U: Fn(&mut C, T, usize),
@@ -421,10 +479,14 @@ where
     };
     let mut s = a;
     while s < b && p.n_items < limit {
-        let e = text[s..b]
-            .iter()
-            .position(|&c| c == b'\n')
-            .map_or(b, |k| s + k);
+        if let Some((t, end)) = fast(&text[s..b]) {
+            push(&mut p.items, t, p.n_items);
+            p.n_items += 1;
+            p.lines += 1;
+            s += end + 1;
+            continue;
+        }
+        let e = find_nl(&text[s..b]).map_or(b, |k| s + k);
         let line = trim_line_end(&text[s..e]);
         if is_skippable(line) {
             p.skipped.push(p.lines);
@@ -453,10 +515,7 @@ fn split_pieces(text: &[u8], range: std::ops::Range<usize>, piece: usize) -> Vec
     while a < range.end {
         let mut b = (a + piece).min(range.end);
         if b < range.end {
-            b = text[b..range.end]
-                .iter()
-                .position(|&c| c == b'\n')
-                .map_or(range.end, |k| b + k + 1);
+            b = find_nl(&text[b..range.end]).map_or(range.end, |k| b + k + 1);
         }
         out.push((a, b));
         a = b;
@@ -466,7 +525,8 @@ fn split_pieces(text: &[u8], range: std::ops::Range<usize>, piece: usize) -> Vec
 
 /// Reads the `n` item lines of a section, skipping comment and blank lines: the input is
 /// taken by blocks of whole lines, each block cut into pieces parsed in parallel
-/// (`parse(line number, text, item index)`, each item `push`ed into its piece's collection
+/// (a line by `fast` if it takes it, else by `parse(line number, text, item index)`; the
+/// result must be the same), each item `push`ed into its piece's collection
 /// made by `new(piece bytes)`) while the next block is read (rayon::join); the pieces are
 /// then applied in line order (`apply(collection, items before it, line number of its k-th
 /// item)`), and the lines after the section's last item are given back to the input. The
@@ -475,12 +535,12 @@ fn split_pieces(text: &[u8], range: std::ops::Range<usize>, piece: usize) -> Vec
 /// wanted), and that line is parsed again with its line and item numbers once the pieces
 /// before it are applied.
 #[allow(clippy::too_many_arguments)]
-fn read_section<R, T, C, P, N, U, A>(
+fn read_section<R, T, C, F, P, N, U, A>(
     cx: &Ctx<'_>,
     inp: &mut Input<R>,
     n: usize,
     what: &str,
-    parse: P,
+    (fast, parse): (F, P),
     new: N,
     push: U,
     mut apply: A,
@@ -488,6 +548,7 @@ fn read_section<R, T, C, P, N, U, A>(
 where
     R: std::io::Read + Send,
     C: Send,
+    F: Fn(&[u8]) -> Option<(T, usize)> + Sync,
     P: Fn(usize, &[u8], usize) -> Result<T> + Sync,
     N: Fn(usize) -> C + Sync,
     U: Fn(&mut C, T, usize) + Sync,
@@ -516,7 +577,7 @@ where
         let parse_block = || {
             pieces_at
                 .par_iter()
-                .map(|&ab| parse_piece(&block.text, ab, limit, &parse, &new, &push))
+                .map(|&ab| parse_piece(&block.text, ab, limit, (&fast, &parse), &new, &push))
                 .collect::<Vec<_>>()
         };
         let (next, pieces) = if ahead {
@@ -536,9 +597,7 @@ where
                 let used = item_line(&p.skipped, n_items - 1) + 1;
                 let mut s = a;
                 for _ in 0..used {
-                    s += block.text[s..block.range.end]
-                        .iter()
-                        .position(|&c| c == b'\n')
+                    s += find_nl(&block.text[s..block.range.end])
                         .map_or(block.range.end - s, |k| k + 1);
                 }
                 inp.line += used;
@@ -597,7 +656,10 @@ fn read_elements<R: std::io::Read + Send>(
         rd,
         n,
         section,
-        |ln, line, _| parse_element(cx, ln, line, dim),
+        (
+            |s: &[u8]| fast_element(s, dim),
+            |ln, line, _| parse_element(cx, ln, line, dim),
+        ),
         |bytes| ElementPiece {
             set: Elements::new(),
             max: None,
@@ -692,7 +754,10 @@ fn read_points<R: std::io::Read + Send>(
         rd,
         n,
         "NPOIN",
-        |ln, line, node| parse_point(cx, ln, line, dim, node),
+        (
+            |_: &[u8]| None,
+            |ln, line, node| parse_point(cx, ln, line, dim, node),
+        ),
         // About 32 bytes per line at least (3 coordinates in full precision take ~60).
         |bytes| Vec::with_capacity(bytes / 32),
         |piece: &mut Vec<[f64; 3]>, p, _| piece.push(p),
@@ -942,6 +1007,40 @@ where
     }
 }
 
+/// The two-digit strings "00" … "99".
+const DIGIT_PAIRS: &[u8; 200] = b"\
+0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
+/// Appends the decimal representation of `v` (the same bytes as `v.to_string()`): the
+/// digits are made two per division into a fixed 20-byte array from the left (the length
+/// known from `ilog10`), the whole array appended and the surplus cut off, so no
+/// variable-length copy is made.
+#[inline]
+fn push_uint(out: &mut Vec<u8>, mut v: u64) {
+    let n = v.checked_ilog10().unwrap_or(0) as usize + 1;
+    let mut tmp = [b'0'; 20];
+    let mut i = n;
+    while v >= 100 {
+        let d = (v % 100) as usize * 2;
+        v /= 100;
+        i -= 2;
+        tmp[i..i + 2].copy_from_slice(&DIGIT_PAIRS[d..d + 2]);
+    }
+    if v >= 10 {
+        let d = v as usize * 2;
+        tmp[..2].copy_from_slice(&DIGIT_PAIRS[d..d + 2]);
+    } else {
+        tmp[0] = b'0' + v as u8;
+    }
+    let start = out.len();
+    out.extend_from_slice(&tmp);
+    out.truncate(start + n);
+}
+
 /// Writes the element lines of `set` (code, nodes, and with `ids` the element's index).
 fn write_elements<W: Write + ?Sized>(set: &Elements, ids: bool, w: &mut W) -> std::io::Result<()> {
     let mut first_id = 0usize;
@@ -949,14 +1048,14 @@ fn write_elements<W: Write + ?Sized>(set: &Elements, ids: bool, w: &mut W) -> st
         let nn = g.kind.n_nodes();
         let code = u64::from(g.kind.vtk_code());
         write_lines(g.len(), w, |e, b| {
-            push_u64(b, code);
+            push_uint(b, code);
             for &v in &g.nodes[e * nn..(e + 1) * nn] {
                 b.push(b'\t');
-                push_u64(b, u64::from(v));
+                push_uint(b, u64::from(v));
             }
             if ids {
                 b.push(b'\t');
-                push_u64(b, (first_id + e) as u64);
+                push_uint(b, (first_id + e) as u64);
             }
             b.push(b'\n');
         })?;
@@ -999,7 +1098,7 @@ pub fn write<W: Write + ?Sized>(mesh: &Mesh, w: &mut W) -> std::io::Result<()> {
             push_f64(b, *x);
             b.push(b'\t');
         }
-        push_u64(b, i as u64);
+        push_uint(b, i as u64);
         b.push(b'\n');
     })?;
     writeln!(w, "NMARK= {}", mesh.markers.len())?;
@@ -1016,15 +1115,114 @@ mod tests {
     use super::*;
 
     #[test]
+    fn integers_print_like_to_string() {
+        let mut b = Vec::new();
+        for x in [
+            0,
+            9,
+            10,
+            99,
+            100,
+            101,
+            999,
+            1000,
+            4_294_967_295,
+            10u64.pow(19),
+            u64::MAX,
+        ]
+        .into_iter()
+        .chain((0..300_000).step_by(7))
+        .chain((0..64).map(|k| 1u64 << k))
+        .chain((1..20).map(|k| 10u64.pow(k) - 1))
+        {
+            b.clear();
+            b.push(b'-');
+            push_uint(&mut b, x);
+            assert_eq!(&b[1..], x.to_string().as_bytes());
+        }
+    }
+
+    #[test]
     fn fast_integer_scan_accepts_only_plain_lines() {
         let mut v = [0u64; 10];
-        assert_eq!(scan_uints(b"10\t1 2  3 4\t5\r", &mut v), Some(6));
+        assert_eq!(scan_uints(b"10\t1 2  3 4\t5\r", &mut v), Some((6, 14)));
         assert_eq!(&v[..6], &[10, 1, 2, 3, 4, 5]);
-        assert_eq!(scan_uints(b"", &mut v), Some(0));
+        assert_eq!(scan_uints(b"", &mut v), Some((0, 0)));
         assert_eq!(scan_uints(b"5 -1 2", &mut v), None);
         assert_eq!(scan_uints(b"5 1.0 2", &mut v), None);
         assert_eq!(scan_uints(b"5 12345678901 2", &mut v), None);
+        assert_eq!(scan_uints(b"5 1234567890 2", &mut v), Some((3, 14)));
+        assert_eq!(v[1], 1_234_567_890);
+        assert_eq!(scan_uints(b"5 99999999999999999999999", &mut v), None);
         assert_eq!(scan_uints(b"1 2 3 4 5 6 7 8 9 10 11", &mut v), None);
+        // Stops at the line end.
+        assert_eq!(
+            scan_uints(b"10 123456789 7\r\n5 x\n", &mut v),
+            Some((3, 15))
+        );
+        assert_eq!(&v[..3], &[10, 123_456_789, 7]);
+    }
+
+    proptest::proptest! {
+        /// The scan equals splitting on separators and `str::parse::<u64>` for lines of
+        /// numbers (any lengths, so any alignment of the eight-byte steps) and refuses lines
+        /// with any other character.
+        #[test]
+        fn integer_scan_equals_str_parse(
+            nums in proptest::collection::vec((0u64..=9_999_999_999, 0usize..11, 0usize..3), 0..11),
+            junk in proptest::option::of((0usize..200, proptest::sample::select(b"x-+.e,;\x00\xff:/".to_vec()))),
+            tail in proptest::sample::select(vec!["", "\n", "\r\n", "\n7 7"]),
+        ) {
+            let mut line = String::new();
+            for &(x, zeros, sep) in &nums {
+                line.push_str(["\t", " ", "  \t"][sep]);
+                line.push_str(&"0".repeat(zeros));
+                line.push_str(&x.to_string());
+            }
+            let mut b = line.clone().into_bytes();
+            let junk_at = junk.map(|(at, c)| {
+                let at = at % (b.len() + 1);
+                b.insert(at, c);
+                at
+            });
+            b.extend_from_slice(tail.as_bytes());
+            let end = b.iter().position(|&c| c == b'\n').unwrap_or(b.len());
+            let mut v = [0u64; 10];
+            let got = scan_uints(&b, &mut v);
+            let want: Option<Vec<u64>> = std::str::from_utf8(&b[..end])
+                .ok()
+                .and_then(|t| {
+                    t.split(['\t', ' ', '\r'])
+                        .filter(|w| !w.is_empty())
+                        .map(|w| {
+                            (w.len() <= 10 && w.bytes().all(|c| c.is_ascii_digit()))
+                                .then(|| w.parse::<u64>().ok())
+                                .flatten()
+                        })
+                        .collect()
+                });
+            // (Every junk character is neither a digit nor a separator.)
+            proptest::prop_assert!(junk_at.is_none() || want.is_none());
+            match want {
+                Some(w) => {
+                    proptest::prop_assert_eq!(got, Some((w.len(), end)));
+                    proptest::prop_assert_eq!(&v[..w.len()], &w[..]);
+                }
+                _ => proptest::prop_assert_eq!(got, None),
+            }
+        }
+
+        /// Eight digits at once equal the decimal value.
+        #[test]
+        fn eight_digits_equal_str_parse(x in 0u64..100_000_000, run in 1usize..9) {
+            let x = x % 10u64.pow(run as u32);
+            let txt = format!("{x:0run$}");
+            let mut t = 0u64;
+            for (j, c) in txt.bytes().enumerate() {
+                t |= u64::from(c - b'0') << (8 * j);
+            }
+            proptest::prop_assert_eq!(eight_digits(t << (8 * (8 - run))), x);
+        }
     }
 
     #[test]
