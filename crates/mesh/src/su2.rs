@@ -2,8 +2,8 @@
 //! `MARKER_TAG` / `MARKER_ELEMS`. Trailing sections that SU2 tools append (periodic
 //! information, FFD boxes) are kept verbatim in [`Mesh::su2_extra`] and written back.
 //!
-//! The reader takes the input in large blocks of whole lines (4 MiB read straight from the
-//! reader, no per-line copy); the element and point sections are parsed by pieces of a block
+//! The reader reads the input 33 MiB at a time straight from the reader (no per-line
+//! copy) and takes it by blocks of whole lines (4 MiB); the element and point sections are parsed by pieces of a block
 //! in parallel while the next block is read, each piece collecting its own elements or
 //! points, which are then appended in line order. The writer formats parallel blocks of
 //! lines while the previous ones are written. The same grid, errors and bytes as a
@@ -248,11 +248,19 @@ fn count(cx: &Ctx<'_>, ln: usize, key: &str, val: &[u8]) -> Result<usize> {
         })
 }
 
-/// Bytes per block of the section reader (a block holds whole lines).
-const BLOCK_BYTES: usize = 1 << 22;
+/// Bytes read from the input at once, and the least capacity of the input's buffers. Above
+/// 32 MiB on purpose: glibc's malloc raises its mmap threshold to the size of a freed
+/// mmap'ed chunk of at most 32 MiB, after which allocations below that size come from the
+/// heap, where freed memory is not given back; freeing 4 MiB read buffers raised the peak
+/// resident memory of a whole 1M-node deformation run by ~40 MB (Linux, glibc).
+const READ_BYTES: usize = 33 << 20;
 
-/// Bytes per piece of a block (each piece parsed by one task; a piece holds whole lines).
-const PIECE_BYTES: usize = 1 << 16;
+/// Blocks of a section (parsed while the next is read) are about `READ_BYTES / TAKES`
+/// bytes: 4 MiB; the elements or points parsed from a block are held until it is applied.
+const TAKES: usize = 8;
+
+/// Pieces per block (each piece, of whole lines, parsed by one task): 64 KiB each.
+const PIECES: usize = 64;
 
 /// Buffered input that hands out single lines (headers, marker tags) and blocks of whole
 /// lines (sections), reading from the inner reader in large slices. Lines end at `\n`; the
@@ -266,7 +274,7 @@ struct Input<R> {
     eof: bool,
     /// Lines handed out so far (the number of the last one).
     line: usize,
-    /// Bytes read from `inner` per call when the buffer is empty ([`BLOCK_BYTES`]; smaller
+    /// Bytes read from `inner` per call when the buffer is empty ([`READ_BYTES`]; smaller
     /// in tests so that small inputs span many blocks).
     block: usize,
 }
@@ -358,32 +366,49 @@ impl<R: std::io::Read> Input<R> {
         })
     }
 
-    /// Takes the next block of whole lines (at least `block` bytes unless the input ends
-    /// first; empty at the end), leaving `spare` as the buffer. Lines are not counted here:
-    /// the caller adds the lines it uses to [`Input::line`] and gives back the rest with
+    /// Takes the next block of whole lines: about `want` bytes (at most
+    /// [`Input::block`] / [`TAKES`], more to end the last line; less at the end of the input; empty at the end). The
+    /// smaller of the block and the rest of the buffer is copied: the block into `spare`, or
+    /// the rest into `spare`, which then becomes the buffer. Lines are not counted here: the
+    /// caller adds the lines it uses to [`Input::line`] and gives back the rest with
     /// [`Input::unread`].
-    fn take_block(&mut self, file: &str, spare: Vec<u8>) -> Result<Block> {
-        let mut searched = self.pos;
+    fn take_block(&mut self, file: &str, mut spare: Vec<u8>, want: usize) -> Result<Block> {
+        let want = want.clamp(1, (self.block / TAKES).max(1));
+        let mut from = self.pos + want - 1;
         let cut = loop {
-            if self.end - self.pos >= self.block || self.eof {
-                if let Some(k) = self.buf[searched..self.end]
-                    .iter()
-                    .rposition(|&c| c == b'\n')
-                {
-                    break searched + k + 1;
+            if self.end - self.pos >= want || self.eof {
+                let at = from.min(self.end);
+                if let Some(k) = find_nl(&self.buf[at..self.end]) {
+                    break at + k + 1;
                 }
                 if self.eof {
                     break self.end;
                 }
-                // A line longer than a block: read on until its end.
-                searched = self.end;
+                // A line longer than the rest of the buffer: read on until its end.
+                from = self.end;
             }
             let before = self.pos;
             self.read_more(file)?;
-            searched -= before;
+            from -= before;
         };
+        let (len, tail) = (cut - self.pos, self.end - cut);
+        if len <= tail {
+            // (Capacity of a read at least, so that no buffer of the size range of the
+            // malloc note at READ_BYTES is freed.)
+            if spare.capacity() < self.block {
+                spare.reserve_exact(self.block - spare.len());
+            }
+            if spare.len() < len {
+                spare.resize(len, 0);
+            }
+            spare[..len].copy_from_slice(&self.buf[self.pos..cut]);
+            self.pos = cut;
+            return Ok(Block {
+                text: spare,
+                range: 0..len,
+            });
+        }
         let text = std::mem::replace(&mut self.buf, spare);
-        let tail = self.end - cut;
         if self.buf.len() < tail {
             self.buf.resize(tail, 0);
         }
@@ -394,13 +419,22 @@ impl<R: std::io::Read> Input<R> {
         Ok(Block { text, range })
     }
 
-    /// Puts `bytes` back in front of the unread input.
-    fn unread(&mut self, bytes: &[u8]) {
-        if bytes.is_empty() {
+    /// Puts `first` and then `second` back in front of the unread input.
+    fn unread(&mut self, first: &[u8], second: &[u8]) {
+        let n = first.len() + second.len();
+        if n == 0 {
             return;
         }
-        let mut b = Vec::with_capacity(bytes.len() + self.end - self.pos + self.block);
-        b.extend_from_slice(bytes);
+        if n <= self.pos {
+            // Room in front of the unread bytes.
+            self.pos -= n;
+            self.buf[self.pos..self.pos + first.len()].copy_from_slice(first);
+            self.buf[self.pos + first.len()..self.pos + n].copy_from_slice(second);
+            return;
+        }
+        let mut b = Vec::with_capacity(n + self.end - self.pos + self.block);
+        b.extend_from_slice(first);
+        b.extend_from_slice(second);
         b.extend_from_slice(&self.buf[self.pos..self.end]);
         self.end = b.len();
         self.pos = 0;
@@ -557,9 +591,12 @@ where
     if n == 0 {
         return Ok(());
     }
-    let piece_bytes = inp.block.div_ceil(BLOCK_BYTES / PIECE_BYTES).max(1);
+    let piece_bytes = (inp.block / TAKES / PIECES).max(1);
     let mut done = 0;
-    let mut block = inp.take_block(cx.file, Vec::new())?;
+    // Bytes wanted for the items still to read (at most a block): 64 per line, so that a
+    // short section (a marker) takes little more than its lines.
+    let want = |items: usize| items.saturating_mul(64);
+    let mut block = inp.take_block(cx.file, Vec::new(), want(n))?;
     let mut spare = Vec::new();
     loop {
         if block.range.is_empty() {
@@ -582,7 +619,8 @@ where
         };
         let (next, pieces) = if ahead {
             let buf = std::mem::take(&mut spare);
-            let (next, pieces) = rayon::join(|| inp.take_block(cx.file, buf), parse_block);
+            let more = want(limit.saturating_sub(block.range.len() / 64));
+            let (next, pieces) = rayon::join(|| inp.take_block(cx.file, buf, more), parse_block);
             (Some(next), pieces)
         } else {
             (None, parse_block())
@@ -603,12 +641,8 @@ where
                 inp.line += used;
                 let rest = &block.text[s..block.range.end];
                 match next {
-                    Some(Ok(nb)) => {
-                        let mut r = rest.to_vec();
-                        r.extend_from_slice(&nb.text[nb.range]);
-                        inp.unread(&r);
-                    }
-                    Some(Err(_)) | None => inp.unread(rest),
+                    Some(Ok(nb)) => inp.unread(rest, &nb.text[nb.range]),
+                    Some(Err(_)) | None => inp.unread(rest, &[]),
                 }
                 return Ok(());
             }
@@ -626,7 +660,7 @@ where
             &mut block,
             match next {
                 Some(r) => r?,
-                None => inp.take_block(cx.file, spare)?,
+                None => inp.take_block(cx.file, spare, want(n - done))?,
             },
         )
         .text;
@@ -669,8 +703,8 @@ fn read_elements<R: std::io::Read + Send>(
             let nn = kind.n_nodes();
             let g = piece.set.group_mut(kind);
             if g.nodes.capacity() == 0 {
-                // About 4 bytes per number on a line.
-                g.nodes.reserve(piece.bytes / (4 * (nn + 1)) * nn);
+                // About 8 bytes per number on a line.
+                g.nodes.reserve(piece.bytes / (8 * (nn + 1)) * nn);
             }
             extend_nodes(&mut g.nodes, &nodes, nn);
             let top = nodes[..nn].iter().copied().max().unwrap_or(0);
@@ -767,7 +801,7 @@ fn read_points<R: std::io::Read + Send>(
 
 /// Reads an SU2 grid from `r`; `file` names the input in errors (`Send`: the next block of
 /// lines is read on one thread while the last one is parsed on the others). The input is
-/// read in slices of 4 MiB (a `BufReader` passes such reads straight through).
+/// read in slices of 33 MiB (a `BufReader` passes such reads straight through).
 ///
 /// ```
 /// let txt = "NDIME= 2\nNELEM= 1\n5 0 1 2 0\nNPOIN= 3\n0 0 0\n1 0 1\n0 1 2\n\
@@ -777,10 +811,10 @@ fn read_points<R: std::io::Read + Send>(
 /// assert_eq!(m.markers[0].name, "wall");
 /// ```
 pub fn read<R: BufRead + Send>(r: R, file: &Path) -> Result<Mesh> {
-    read_by_blocks(r, file, BLOCK_BYTES)
+    read_by_blocks(r, file, READ_BYTES)
 }
 
-/// [`read`] taking the input by blocks of about `block` bytes.
+/// [`read`] reading the input by `block` bytes at once (sections taken by an eighth of it).
 fn read_by_blocks<R: std::io::Read + Send>(r: R, file: &Path, block: usize) -> Result<Mesh> {
     let file = file.display().to_string();
     let cx = Ctx { file: &file };
@@ -1228,7 +1262,7 @@ mod tests {
     #[test]
     fn parallel_write_and_read_span_several_blocks_and_batches() {
         // 162 000 tetrahedra (more than WRITE_BLOCK × WRITE_BATCH lines), 29 791 points
-        // (the whole file is more than one read block), irrational coordinates.
+        // (the whole file is more than one block of a section), irrational coordinates.
         let mut m = crate::generate::box_tets(30, 30, 30, [0.0; 3], [1.0, 0.7, 1.3]);
         for (i, p) in m.coords.iter_mut().enumerate() {
             p[0] += 1e-3 * (i as f64).sin();
@@ -1257,7 +1291,6 @@ mod tests {
         }
         let head = format!("NDIME= 3\nNELEM= {}\n", m.cells.len());
         assert_eq!(&one[head.len()..head.len() + seq.len()], &seq[..]);
-        assert!(one.len() > BLOCK_BYTES);
         let back = read(&one[..], "t.su2".as_ref()).unwrap();
         assert_eq!(back.coords, m.coords);
         assert_eq!(back.cells, m.cells);
