@@ -17,7 +17,9 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Location, Result};
 use crate::grid::{ElementKind, Elements, Marker, Mesh};
-use crate::text::{Tokens, parse_f64, parse_i64, parse_u64, push_f64, reserve_capped, syntax};
+use crate::text::{
+    Tokens, parse_f64, parse_i64, parse_u64, push_f64, push_u64, reserve_capped, syntax,
+};
 
 /// Splits `KEY= value` (value trimmed); `None` when the line has no `=`.
 fn keyword(line: &[u8]) -> Option<(&[u8], &[u8])> {
@@ -1051,40 +1053,6 @@ where
     }
 }
 
-/// The two-digit strings "00" … "99".
-const DIGIT_PAIRS: &[u8; 200] = b"\
-0001020304050607080910111213141516171819\
-2021222324252627282930313233343536373839\
-4041424344454647484950515253545556575859\
-6061626364656667686970717273747576777879\
-8081828384858687888990919293949596979899";
-
-/// Appends the decimal representation of `v` (the same bytes as `v.to_string()`): the
-/// digits are made two per division into a fixed 20-byte array from the left (the length
-/// known from `ilog10`), the whole array appended and the surplus cut off, so no
-/// variable-length copy is made.
-#[inline]
-fn push_uint(out: &mut Vec<u8>, mut v: u64) {
-    let n = v.checked_ilog10().unwrap_or(0) as usize + 1;
-    let mut tmp = [b'0'; 20];
-    let mut i = n;
-    while v >= 100 {
-        let d = (v % 100) as usize * 2;
-        v /= 100;
-        i -= 2;
-        tmp[i..i + 2].copy_from_slice(&DIGIT_PAIRS[d..d + 2]);
-    }
-    if v >= 10 {
-        let d = v as usize * 2;
-        tmp[..2].copy_from_slice(&DIGIT_PAIRS[d..d + 2]);
-    } else {
-        tmp[0] = b'0' + v as u8;
-    }
-    let start = out.len();
-    out.extend_from_slice(&tmp);
-    out.truncate(start + n);
-}
-
 /// Writes the element lines of `set` (code, nodes, and with `ids` the element's index).
 fn write_elements<W: Write + ?Sized>(set: &Elements, ids: bool, w: &mut W) -> std::io::Result<()> {
     let mut first_id = 0usize;
@@ -1092,14 +1060,14 @@ fn write_elements<W: Write + ?Sized>(set: &Elements, ids: bool, w: &mut W) -> st
         let nn = g.kind.n_nodes();
         let code = u64::from(g.kind.vtk_code());
         write_lines(g.len(), w, |e, b| {
-            push_uint(b, code);
+            push_u64(b, code);
             for &v in &g.nodes[e * nn..(e + 1) * nn] {
                 b.push(b'\t');
-                push_uint(b, u64::from(v));
+                push_u64(b, u64::from(v));
             }
             if ids {
                 b.push(b'\t');
-                push_uint(b, (first_id + e) as u64);
+                push_u64(b, (first_id + e) as u64);
             }
             b.push(b'\n');
         })?;
@@ -1142,7 +1110,7 @@ pub fn write<W: Write + ?Sized>(mesh: &Mesh, w: &mut W) -> std::io::Result<()> {
             push_f64(b, *x);
             b.push(b'\t');
         }
-        push_uint(b, i as u64);
+        push_u64(b, i as u64);
         b.push(b'\n');
     })?;
     writeln!(w, "NMARK= {}", mesh.markers.len())?;
@@ -1157,34 +1125,6 @@ pub fn write<W: Write + ?Sized>(mesh: &Mesh, w: &mut W) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn integers_print_like_to_string() {
-        let mut b = Vec::new();
-        for x in [
-            0,
-            9,
-            10,
-            99,
-            100,
-            101,
-            999,
-            1000,
-            4_294_967_295,
-            10u64.pow(19),
-            u64::MAX,
-        ]
-        .into_iter()
-        .chain((0..300_000).step_by(7))
-        .chain((0..64).map(|k| 1u64 << k))
-        .chain((1..20).map(|k| 10u64.pow(k) - 1))
-        {
-            b.clear();
-            b.push(b'-');
-            push_uint(&mut b, x);
-            assert_eq!(&b[1..], x.to_string().as_bytes());
-        }
-    }
 
     #[test]
     fn fast_integer_scan_accepts_only_plain_lines() {
