@@ -302,15 +302,18 @@ impl<R: std::io::Read> Input<R> {
     }
 
     /// Reads more bytes (at least one unless at the end): moves the unread bytes to the
-    /// front, makes room for `block` more and reads into it.
+    /// front, makes room for more (64 KiB at first, doubling up to `block`, so that a small
+    /// file needs no large buffer; the growth is by `realloc`, which glibc does by `mremap`
+    /// for large buffers, without the free of the note at [`READ_BYTES`]) and reads into it.
     fn read_more(&mut self, file: &str) -> Result<()> {
         if self.pos > 0 {
             self.buf.copy_within(self.pos..self.end, 0);
             self.end -= self.pos;
             self.pos = 0;
         }
-        if self.buf.len() < self.end + self.block {
-            self.buf.resize(self.end + self.block, 0);
+        let room = self.buf.len().max(1 << 16).min(self.block.max(1));
+        if self.buf.len() < self.end + room {
+            self.buf.resize(self.end + room, 0);
         }
         loop {
             match self.inner.read(&mut self.buf[self.end..]) {
