@@ -1,11 +1,14 @@
 //! Node-to-node adjacency (the grid's edge graph) in compressed sparse row form.
 //!
-//! Built once, in parallel, without per-node heap allocation: a node-to-element table is
-//! made by counting, prefix sum and a sequential fill (so each row lists its elements in
-//! increasing order); then every node gathers the edge neighbours from its elements (through
-//! a per-kind table of local neighbours) into a per-task scratch buffer, sorts and
-//! deduplicates them, and appends them to its block of nodes; the blocks are concatenated in
-//! order. The result is independent of the number of threads.
+//! Built once, in parallel, without per-node heap allocation: a node-to-element table
+//! (element number across the kind groups and local node in one `u32`) is made by counting,
+//! prefix sum and a fill, the counting and the fill in parallel over node ranges (each range scans the whole
+//! connectivity in element order, so each row lists its elements in increasing order
+//! whatever the split); then every node gathers the edge neighbours from its elements
+//! (through a per-kind table of local neighbours)
+//! into a per-task scratch buffer, sorts and deduplicates them, and appends them to its
+//! block of nodes; the blocks are concatenated in order. The result is independent of the
+//! number of threads.
 
 use rayon::prelude::*;
 
@@ -37,38 +40,112 @@ fn local_neighbours(kind: ElementKind, local: usize, out: &mut [u8; 4]) -> usize
     n
 }
 
-/// Node-to-element incidence: for node `i`, the (group index, element index, local node)
-/// triples packed in `slots[offsets[i]..offsets[i + 1]]`.
+/// Node-to-element incidence: for node `i`, `slots[offsets[i]..offsets[i + 1]]` holds its
+/// elements in increasing order (numbered across the groups in order), each with the node's
+/// position in it: `element << 3 | local`.
 struct Incidence {
     offsets: Vec<usize>,
-    /// Group index in the top 3 bits, local node in the low 3 bits, element index between.
-    slots: Vec<u64>,
+    slots: Vec<u32>,
+    /// Number of the first element of each group.
+    group_start: Vec<u32>,
 }
 
-fn incidence(n_nodes: usize, cells: &Elements) -> Incidence {
-    let mut counts = vec![0usize; n_nodes + 1];
-    for g in cells.groups() {
-        for &v in &g.nodes {
-            counts[v as usize + 1] += 1;
+impl Incidence {
+    /// The group of element `e` and its index within the group.
+    #[inline]
+    fn locate(&self, e: u32) -> (usize, usize) {
+        let mut gi = 0;
+        while gi + 1 < self.group_start.len() && self.group_start[gi + 1] <= e {
+            gi += 1;
         }
+        (gi, (e - self.group_start[gi]) as usize)
     }
+}
+
+/// Most elements an element set may have for [`Adjacency::from_elements`] (the element
+/// number and the local node share a `u32` of the incidence table): 2^29, 536 M (a grid of
+/// that size would hold 8.6 GB of tetrahedron connectivity).
+pub const MAX_ELEMENTS: usize = 1 << 29;
+
+/// Node ranges of the parallel incidence passes: one per thread (each pass scans all the
+/// connectivity and handles the nodes of its range, so the result does not depend on the
+/// split).
+fn node_ranges(n_nodes: usize) -> Vec<(usize, usize)> {
+    let k = rayon::current_num_threads().clamp(1, 64);
+    let step = n_nodes.div_ceil(k).max(1);
+    (0..n_nodes)
+        .step_by(step)
+        .map(|lo| (lo, (lo + step).min(n_nodes)))
+        .collect()
+}
+
+/// Counting, prefix sum and fill; both passes run in parallel over node ranges, every range
+/// scanning the whole connectivity in element order (so each row lists its elements in
+/// increasing order).
+fn incidence(n_nodes: usize, cells: &Elements) -> Incidence {
+    let ranges = node_ranges(n_nodes);
+    assert!(
+        cells.len() <= MAX_ELEMENTS,
+        "Adjacency: {} elements, at most {MAX_ELEMENTS} supported",
+        cells.len()
+    );
+    let mut group_start = Vec::with_capacity(cells.groups().len());
+    let mut total = 0;
+    for g in cells.groups() {
+        group_start.push(total as u32);
+        total += g.len();
+    }
+    // counts[i + 1] = number of elements of node i.
+    let mut counts = vec![0usize; n_nodes + 1];
+    let mut rest = &mut counts[1..];
+    let mut parts = Vec::with_capacity(ranges.len());
+    for &(lo, hi) in &ranges {
+        let (part, r) = rest.split_at_mut(hi - lo);
+        parts.push((lo, part));
+        rest = r;
+    }
+    parts.into_par_iter().for_each(|(lo, part)| {
+        for g in cells.groups() {
+            for &v in &g.nodes {
+                if let Some(c) = (v as usize).checked_sub(lo).and_then(|k| part.get_mut(k)) {
+                    *c += 1;
+                }
+            }
+        }
+    });
     for i in 0..n_nodes {
         counts[i + 1] += counts[i];
     }
     let offsets = counts;
-    let mut cursor = offsets.clone();
-    let mut slots = vec![0u64; offsets[n_nodes]];
-    for (gi, g) in cells.groups().iter().enumerate() {
-        let nn = g.kind.n_nodes();
-        for (elem, conn) in g.nodes.chunks_exact(nn).enumerate() {
-            for (local, &v) in conn.iter().enumerate() {
-                let c = &mut cursor[v as usize];
-                slots[*c] = ((gi as u64) << 61) | ((elem as u64) << 3) | local as u64;
-                *c += 1;
+    let mut slots = vec![0u32; offsets[n_nodes]];
+    let mut rest = &mut slots[..];
+    let mut parts = Vec::with_capacity(ranges.len());
+    for &(lo, hi) in &ranges {
+        let (part, r) = rest.split_at_mut(offsets[hi] - offsets[lo]);
+        parts.push((lo, hi, part));
+        rest = r;
+    }
+    parts.into_par_iter().for_each(|(lo, hi, part)| {
+        let base = offsets[lo];
+        let mut cursor: Vec<usize> = offsets[lo..hi].iter().map(|&o| o - base).collect();
+        for (g, &first) in cells.groups().iter().zip(&group_start) {
+            let nn = g.kind.n_nodes();
+            for (e, conn) in g.nodes.chunks_exact(nn).enumerate() {
+                let slot = (first + e as u32) << 3;
+                for (local, &v) in conn.iter().enumerate() {
+                    if let Some(c) = (v as usize).checked_sub(lo).and_then(|k| cursor.get_mut(k)) {
+                        part[*c] = slot | local as u32;
+                        *c += 1;
+                    }
+                }
             }
         }
+    });
+    Incidence {
+        offsets,
+        slots,
+        group_start,
     }
-    Incidence { offsets, slots }
 }
 
 /// Local neighbours of every local node of a kind (at most 4 each) and their counts.
@@ -99,10 +176,9 @@ fn gather(
     let stamp = node as u32 + 1;
     let groups = cells.groups();
     for &slot in &inc.slots[inc.offsets[node]..inc.offsets[node + 1]] {
-        let gi = (slot >> 61) as usize;
-        let g = &groups[gi];
-        let elem = ((slot & ((1 << 61) - 1)) >> 3) as usize;
+        let (gi, elem) = inc.locate(slot >> 3);
         let local = (slot & 7) as usize;
+        let g = &groups[gi];
         let nn = g.kind.n_nodes();
         let conn = &g.nodes[elem * nn..elem * nn + nn];
         let (loc, cnt) = &tables[gi];
@@ -137,6 +213,9 @@ impl Adjacency {
     }
 
     /// Builds the adjacency of any element set over `n_nodes` nodes.
+    ///
+    /// # Panics
+    /// With more than [`MAX_ELEMENTS`] elements.
     pub fn from_elements(n_nodes: usize, cells: &Elements) -> Self {
         let inc = incidence(n_nodes, cells);
         let tables: Vec<NeighbourTable> = cells
@@ -257,13 +336,19 @@ mod tests {
             cells.push(ElementKind::Prism, &h[..6], None);
             cells.push(ElementKind::Pyramid, &h[..5], None);
         }
+        // Degenerate elements (a node repeated).
+        cells.push(ElementKind::Tetra, &[5, 9, 5, 1000], None);
+        cells.push(ElementKind::Prism, &[7, 7, 7, 3000, 3001, 3000], None);
         let a = Adjacency::from_elements(n, &cells);
         let want = naive(n, &cells);
         for (i, w) in want.iter().enumerate() {
             assert_eq!(a.neighbours(i), &w[..], "node {i}");
         }
-        let one = testkit::with_threads(1, || Adjacency::from_elements(n, &cells));
-        assert_eq!(one, a);
+        // The incidence passes split the nodes by thread count: same result for any.
+        for threads in [1, 3] {
+            let other = testkit::with_threads(threads, || Adjacency::from_elements(n, &cells));
+            assert_eq!(other, a);
+        }
     }
 
     #[test]

@@ -2,10 +2,12 @@
 //! `MARKER_TAG` / `MARKER_ELEMS`. Trailing sections that SU2 tools append (periodic
 //! information, FFD boxes) are kept verbatim in [`Mesh::su2_extra`] and written back.
 //!
-//! The reader streams the input line by line. The element and point sections are read in
-//! batches of lines (each batch parsed in parallel while the next one is read) and written in
-//! parallel blocks: the same grid, errors and bytes as a sequential reader and writer, for
-//! any thread count. Element codes are VTK cell types (3 line, 5 triangle, 9 quad, 10 tetra,
+//! The reader reads the input 33 MiB at a time straight from the reader (no per-line
+//! copy) and takes it by blocks of whole lines (4 MiB); the element and point sections are parsed by pieces of a block
+//! in parallel while the next block is read, each piece collecting its own elements or
+//! points, which are then appended in line order. The writer formats parallel blocks of
+//! lines while the previous ones are written. The same grid, errors and bytes as a
+//! sequential reader and writer, for any thread count. Element codes are VTK cell types (3 line, 5 triangle, 9 quad, 10 tetra,
 //! 12 hexa, 13 prism, 14 pyramid).
 
 use std::io::{BufRead, Write};
@@ -16,7 +18,7 @@ use rayon::prelude::*;
 use crate::error::{Error, Location, Result};
 use crate::grid::{ElementKind, Elements, Marker, Mesh};
 use crate::text::{
-    LineReader, Tokens, parse_f64, parse_i64, parse_u64, push_f64, push_u64, reserve_capped, syntax,
+    Tokens, parse_f64, parse_i64, parse_u64, push_f64, push_u64, reserve_capped, syntax,
 };
 
 /// Splits `KEY= value` (value trimmed); `None` when the line has no `=`.
@@ -58,38 +60,102 @@ impl Ctx<'_> {
     }
 }
 
-/// Scans a line of unsigned integers separated by spaces or tabs into `out`; `None` if the
-/// line holds anything else, more than `out.len()` numbers or a number above `u32::MAX`
-/// (the caller then re-reads it with full error reporting).
+/// The value of eight decimal digits given as byte values 0–9, the first (most
+/// significant) in the lowest byte: three multiplications combine pairs, quads, octets
+/// (exact integer arithmetic: the largest intermediate, 99 999 999 · 2^32, fits in 64 bits).
 #[inline]
-fn scan_uints(line: &[u8], out: &mut [u64; 10]) -> Option<usize> {
-    let mut n = 0;
-    let mut acc: u64 = 0;
-    let mut digits = 0u32;
-    for &c in line {
-        let d = c.wrapping_sub(b'0');
-        if d <= 9 {
-            acc = acc * 10 + u64::from(d);
-            digits += 1;
-            if digits > 10 {
-                return None;
+fn eight_digits(v: u64) -> u64 {
+    const MASK: u64 = 0x0000_00FF_0000_00FF;
+    const MUL1: u64 = 100 + (1_000_000 << 32);
+    const MUL2: u64 = 1 + (10_000 << 32);
+    // Byte pairs: 10 · d[2k] + d[2k + 1] in the even bytes.
+    let v = v.wrapping_mul(10).wrapping_add(v >> 8);
+    ((v & MASK)
+        .wrapping_mul(MUL1)
+        .wrapping_add(((v >> 16) & MASK).wrapping_mul(MUL2)))
+        >> 32
+}
+
+/// Scans unsigned integers separated by spaces, tabs or `\r` from the start of `s` to the
+/// first `\n` (or the end) into `out`: the count of numbers and the position of that line
+/// end. `None` if the line holds anything else, more than `out.len()` numbers or a number of
+/// more than 10 digits (the caller then re-reads it with full error reporting). Up to eight
+/// digits of a number are taken at once when eight bytes are left ([`eight_digits`]).
+#[inline]
+fn scan_uints(s: &[u8], out: &mut [u64; 10]) -> Option<(usize, usize)> {
+    const LOW7: u64 = 0x7F7F_7F7F_7F7F_7F7F;
+    const HIGH: u64 = 0x8080_8080_8080_8080;
+    const ZEROS: u64 = 0x3030_3030_3030_3030;
+    let is_sep = |c: u8| c == b'\t' || c == b' ' || c == b'\r';
+    let (len, mut i, mut n) = (s.len(), 0, 0);
+    loop {
+        while i < len && is_sep(s[i]) {
+            i += 1;
+        }
+        if i == len || s[i] == b'\n' {
+            return Some((n, i));
+        }
+        let start = i;
+        let mut acc: u64 = 0;
+        if let Some(chunk) = s.get(i..i + 8).and_then(|c| <[u8; 8]>::try_from(c).ok()) {
+            // Byte j of t is d_j = s[i + j] - '0' for a digit; the high bit of byte j of
+            // `non` is set iff s[i + j] is not a digit (no carry crosses a byte: 0x7F +
+            // 0x76 < 0x100).
+            let t = u64::from_le_bytes(chunk) ^ ZEROS;
+            let non = (((t & LOW7) + 0x7676_7676_7676_7676) | t) & HIGH;
+            let run = (non.trailing_zeros() / 8) as usize;
+            if run > 0 {
+                // Keep the run's bytes, shifted up: the bytes below are leading zeros.
+                acc = eight_digits(t << (8 * (8 - run)));
+                i += run;
             }
-        } else if c == b' ' || c == b'\t' || c == b'\r' {
-            if digits > 0 {
-                *out.get_mut(n)? = acc;
-                n += 1;
-                acc = 0;
-                digits = 0;
+        }
+        while i < len {
+            let d = s[i].wrapping_sub(b'0');
+            if d > 9 {
+                break;
             }
-        } else {
+            // (Wrapping: a number of more than 10 digits is refused below.)
+            acc = acc.wrapping_mul(10).wrapping_add(u64::from(d));
+            i += 1;
+        }
+        if i == start || i - start > 10 || (i < len && !is_sep(s[i]) && s[i] != b'\n') {
             return None;
         }
-    }
-    if digits > 0 {
         *out.get_mut(n)? = acc;
         n += 1;
     }
-    Some(n)
+}
+
+/// The element of a line scanned by [`scan_uints`] (`k` numbers in `v`) if it is a
+/// well-formed `want_dim`-D element line: code, nodes below `u32::MAX`, optionally an index.
+#[inline]
+fn plain_element(v: &[u64; 10], k: usize, want_dim: u8) -> Option<(ElementKind, [u32; 8])> {
+    if k == 0 {
+        return None;
+    }
+    let kind = ElementKind::from_vtk_code(i64::try_from(v[0]).ok()?)?;
+    let nn = kind.n_nodes();
+    if kind.dim() != want_dim || !(k == nn + 1 || k == nn + 2) {
+        return None;
+    }
+    let mut nodes = [0u32; 8];
+    for (o, &x) in nodes.iter_mut().zip(&v[1..=nn]) {
+        if x >= u64::from(u32::MAX) {
+            return None;
+        }
+        *o = x as u32;
+    }
+    Some((kind, nodes))
+}
+
+/// The fast path of the element reader: a well-formed element line at the start of `s`,
+/// and the position of its line end.
+#[inline]
+fn fast_element(s: &[u8], want_dim: u8) -> Option<((ElementKind, [u32; 8]), usize)> {
+    let mut v = [0u64; 10];
+    let (k, end) = scan_uints(s, &mut v)?;
+    Some((plain_element(&v, k, want_dim)?, end))
 }
 
 /// Parses one element line: the code, `n_nodes` node indices, optionally the element index
@@ -100,23 +166,11 @@ fn parse_element(
     line: &[u8],
     want_dim: u8,
 ) -> Result<(ElementKind, [u32; 8])> {
-    let mut nodes = [0u32; 8];
     // Fast path for well-formed lines; anything unusual falls through to the checked parse.
-    let mut v = [0u64; 10];
-    if let Some(k) = scan_uints(line, &mut v)
-        && k >= 1
-        && let Some(kind) = ElementKind::from_vtk_code(v[0] as i64)
-        && kind.dim() == want_dim
-        && (k == kind.n_nodes() + 1 || k == kind.n_nodes() + 2)
-        && v[1..=kind.n_nodes()]
-            .iter()
-            .all(|&x| x < u64::from(u32::MAX))
-    {
-        for (o, &x) in nodes.iter_mut().zip(&v[1..=kind.n_nodes()]) {
-            *o = x as u32;
-        }
-        return Ok((kind, nodes));
+    if let Some((e, _)) = fast_element(line, want_dim) {
+        return Ok(e);
     }
+    let mut nodes = [0u32; 8];
     let mut tok = Tokens::new(line);
     let code_tok = tok.next().ok_or_else(|| cx.err(ln, "empty element line"))?;
     let code = parse_i64(code_tok).ok_or_else(|| {
@@ -196,135 +250,511 @@ fn count(cx: &Ctx<'_>, ln: usize, key: &str, val: &[u8]) -> Result<usize> {
         })
 }
 
-/// Lines per batch of the element reader.
-const BATCH: usize = 1 << 14;
+/// Bytes read from the input at once, and the least capacity of the input's buffers. Above
+/// 32 MiB on purpose: glibc's malloc raises its mmap threshold to the size of a freed
+/// mmap'ed chunk of at most 32 MiB, after which allocations below that size come from the
+/// heap, where freed memory is not given back; freeing 4 MiB read buffers raised the peak
+/// resident memory of a whole 1M-node deformation run by ~40 MB (Linux, glibc).
+const READ_BYTES: usize = 33 << 20;
 
-/// One batch of lines of a section: their text, and per line (line number, start, end).
-#[derive(Default)]
-struct Batch {
-    text: Vec<u8>,
-    spans: Vec<(usize, usize, usize)>,
-    /// Index (within the section) of the batch's first item.
-    first: usize,
-    /// The read error that ended the batch early, if any.
-    err: Option<Error>,
+/// Blocks of a section (parsed while the next is read) are about `READ_BYTES / TAKES`
+/// bytes: 4 MiB; the elements or points parsed from a block are held until it is applied.
+const TAKES: usize = 8;
+
+/// Pieces per block (each piece, of whole lines, parsed by one task): 64 KiB each.
+const PIECES: usize = 64;
+
+/// Buffered input that hands out single lines (headers, marker tags) and blocks of whole
+/// lines (sections), reading from the inner reader in large slices. Lines end at `\n`; the
+/// `\r`s before it are dropped; a last line without `\n` counts.
+struct Input<R> {
+    inner: R,
+    /// Bytes read and not yet handed out: `buf[pos..end]`.
+    buf: Vec<u8>,
+    pos: usize,
+    end: usize,
+    eof: bool,
+    /// Lines handed out so far (the number of the last one).
+    line: usize,
+    /// Bytes read from `inner` per call when the buffer is empty ([`READ_BYTES`]; smaller
+    /// in tests so that small inputs span many blocks).
+    block: usize,
 }
 
-impl Batch {
-    /// Reads the next lines of the section (items `first..`, at most [`BATCH`], fewer at the
-    /// section's end `n` or at a read error), skipping comments and blank lines.
-    fn fill<R: BufRead>(
-        &mut self,
-        rd: &mut LineReader<R>,
-        file: &str,
-        what: &str,
-        first: usize,
-        n: usize,
-    ) {
-        self.text.clear();
-        self.spans.clear();
-        self.first = first;
-        self.err = None;
-        while self.spans.len() < BATCH && first + self.spans.len() < n {
-            match rd.expect_line(file, what) {
-                Ok((ln, line)) => {
-                    if is_skippable(line) {
-                        continue;
-                    }
-                    let a = self.text.len();
-                    self.text.extend_from_slice(line);
-                    self.spans.push((ln, a, self.text.len()));
+/// Whole lines taken out of an [`Input`]: `text[range]`, ending with a line end unless the
+/// input ended without one.
+struct Block {
+    text: Vec<u8>,
+    range: std::ops::Range<usize>,
+}
+
+impl<R: std::io::Read> Input<R> {
+    fn new(inner: R, block: usize) -> Self {
+        Input {
+            inner,
+            buf: Vec::new(),
+            pos: 0,
+            end: 0,
+            eof: false,
+            line: 0,
+            block,
+        }
+    }
+
+    /// Reads more bytes (at least one unless at the end): moves the unread bytes to the
+    /// front, makes room for more (64 KiB at first, doubling up to `block`, so that a small
+    /// file needs no large buffer; the growth is by `realloc`, which glibc does by `mremap`
+    /// for large buffers, without the free of the note at [`READ_BYTES`]) and reads into it.
+    fn read_more(&mut self, file: &str) -> Result<()> {
+        if self.pos > 0 {
+            self.buf.copy_within(self.pos..self.end, 0);
+            self.end -= self.pos;
+            self.pos = 0;
+        }
+        let room = self.buf.len().max(1 << 16).min(self.block.max(1));
+        if self.buf.len() < self.end + room {
+            self.buf.resize(self.end + room, 0);
+        }
+        loop {
+            match self.inner.read(&mut self.buf[self.end..]) {
+                Ok(0) => {
+                    self.eof = true;
+                    return Ok(());
                 }
-                Err(e) => {
-                    self.err = Some(e);
-                    break;
+                Ok(k) => {
+                    self.end += k;
+                    return Ok(());
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(error) => {
+                    return Err(Error::Io {
+                        file: file.to_string(),
+                        error,
+                    });
                 }
             }
         }
     }
-}
 
-/// Reads the `n` item lines of a section: lines are read sequentially by batches, each batch
-/// parsed in parallel (`parse(line number, text, item index)`) while the next batch is read
-/// (rayon::join), and the results applied in line order (`apply(item, line number)`), so the
-/// result and the first error reported are those of a sequential read.
-fn read_section<R, T, P, A>(
-    cx: &Ctx<'_>,
-    rd: &mut LineReader<R>,
-    n: usize,
-    what: &str,
-    parse: P,
-    mut apply: A,
-) -> Result<()>
-where
-    R: BufRead + Send,
-    T: Send,
-    P: Fn(usize, &[u8], usize) -> Result<T> + Sync,
-    A: FnMut(T, usize),
-{
-    let (mut cur, mut next) = (Batch::default(), Batch::default());
-    let mut parsed: Vec<Result<T>> = Vec::new();
-    cur.fill(rd, cx.file, what, 0, n);
-    loop {
-        let read = cur.first + cur.spans.len();
-        let more = cur.err.is_none() && read < n;
-        let parse_cur = |out: &mut Vec<Result<T>>| {
-            cur.spans
-                .par_iter()
-                .enumerate()
-                .map(|(k, &(ln, a, b))| parse(ln, &cur.text[a..b], cur.first + k))
-                .collect_into_vec(out);
+    /// The next line (number, text without the line end), or `None` at the end.
+    fn next_line(&mut self, file: &str) -> Result<Option<(usize, &[u8])>> {
+        let mut scanned = 0;
+        let (a, b) = loop {
+            if let Some(k) = find_nl(&self.buf[self.pos + scanned..self.end]) {
+                let nl = self.pos + scanned + k;
+                let a = self.pos;
+                self.pos = nl + 1;
+                break (a, nl);
+            }
+            if self.eof {
+                if self.pos == self.end {
+                    return Ok(None);
+                }
+                let a = self.pos;
+                self.pos = self.end;
+                break (a, self.end);
+            }
+            scanned = self.end - self.pos;
+            self.read_more(file)?;
         };
-        if more {
-            rayon::join(
-                || next.fill(rd, cx.file, what, read, n),
-                || parse_cur(&mut parsed),
-            );
-        } else {
-            parse_cur(&mut parsed);
+        self.line += 1;
+        Ok(Some((self.line, trim_line_end(&self.buf[a..b]))))
+    }
+
+    /// The next line, or a [`Error::Truncated`] naming `what`.
+    fn expect_line(&mut self, file: &str, what: &str) -> Result<(usize, &[u8])> {
+        let at = Location::Line(self.line + 1);
+        self.next_line(file)?.ok_or_else(|| Error::Truncated {
+            file: file.to_string(),
+            at,
+            what: what.to_string(),
+        })
+    }
+
+    /// Takes the next block of whole lines: about `want` bytes (at most
+    /// [`Input::block`] / [`TAKES`], more to end the last line; less at the end of the input; empty at the end). The
+    /// smaller of the block and the rest of the buffer is copied: the block into `spare`, or
+    /// the rest into `spare`, which then becomes the buffer. Lines are not counted here: the
+    /// caller adds the lines it uses to [`Input::line`] and gives back the rest with
+    /// [`Input::unread`].
+    fn take_block(&mut self, file: &str, mut spare: Vec<u8>, want: usize) -> Result<Block> {
+        let want = want.clamp(1, (self.block / TAKES).max(1));
+        let mut from = self.pos + want - 1;
+        let cut = loop {
+            if self.end - self.pos >= want || self.eof {
+                let at = from.min(self.end);
+                if let Some(k) = find_nl(&self.buf[at..self.end]) {
+                    break at + k + 1;
+                }
+                if self.eof {
+                    break self.end;
+                }
+                // A line longer than the rest of the buffer: read on until its end.
+                from = self.end;
+            }
+            let before = self.pos;
+            self.read_more(file)?;
+            from -= before;
+        };
+        let (len, tail) = (cut - self.pos, self.end - cut);
+        if len <= tail {
+            // (Capacity of a read at least, so that no buffer of the size range of the
+            // malloc note at READ_BYTES is freed.)
+            if spare.capacity() < self.block {
+                spare.reserve_exact(self.block - spare.len());
+            }
+            if spare.len() < len {
+                spare.resize(len, 0);
+            }
+            spare[..len].copy_from_slice(&self.buf[self.pos..cut]);
+            self.pos = cut;
+            return Ok(Block {
+                text: spare,
+                range: 0..len,
+            });
         }
-        for (r, &(ln, _, _)) in parsed.drain(..).zip(&cur.spans) {
-            apply(r?, ln);
+        let text = std::mem::replace(&mut self.buf, spare);
+        if self.buf.len() < tail {
+            self.buf.resize(tail, 0);
         }
-        if let Some(e) = cur.err.take() {
-            return Err(e);
+        self.buf[..tail].copy_from_slice(&text[cut..self.end]);
+        let range = self.pos..cut;
+        self.end = tail;
+        self.pos = 0;
+        Ok(Block { text, range })
+    }
+
+    /// Puts `first` and then `second` back in front of the unread input.
+    fn unread(&mut self, first: &[u8], second: &[u8]) {
+        let n = first.len() + second.len();
+        if n == 0 {
+            return;
         }
-        if !more {
-            return Ok(());
+        if n <= self.pos {
+            // Room in front of the unread bytes.
+            self.pos -= n;
+            self.buf[self.pos..self.pos + first.len()].copy_from_slice(first);
+            self.buf[self.pos + first.len()..self.pos + n].copy_from_slice(second);
+            return;
         }
-        std::mem::swap(&mut cur, &mut next);
+        let mut b = Vec::with_capacity(n + self.end - self.pos + self.block);
+        b.extend_from_slice(first);
+        b.extend_from_slice(second);
+        b.extend_from_slice(&self.buf[self.pos..self.end]);
+        self.end = b.len();
+        self.pos = 0;
+        self.buf = b;
     }
 }
 
-/// Reads `n` element lines into `set` ([`read_section`]).
-fn read_elements<R: BufRead + Send>(
+/// Position of the first `\n` in `s` (by the standard library's word-at-a-time `memchr`,
+/// through `BufRead::skip_until` on a slice).
+#[inline]
+fn find_nl(s: &[u8]) -> Option<usize> {
+    let mut r = s;
+    let k = BufRead::skip_until(&mut r, b'\n').unwrap_or(0);
+    (k > 0 && s[k - 1] == b'\n').then(|| k - 1)
+}
+
+/// A line without its `\n` and the `\r`s before it.
+#[inline]
+fn trim_line_end(mut l: &[u8]) -> &[u8] {
+    while let [rest @ .., b'\n' | b'\r'] = l {
+        l = rest;
+    }
+    l
+}
+
+/// What one task made of one piece of a block.
+struct Piece<C> {
+    /// The items parsed, in line order, up to the first error or the item limit.
+    items: C,
+    /// Number of items in `items`.
+    n_items: usize,
+    /// Local indices (0-based, within the piece) of the comment and blank lines skipped.
+    skipped: Vec<usize>,
+    /// Lines in the piece (all of them when it was parsed to its end).
+    lines: usize,
+    /// The first line that failed: its local index and its text (`text[a..b]` of the block).
+    failed: Option<(usize, usize, usize)>,
+}
+
+/// Local line index of the `k`-th item of a piece whose skipped lines are `skipped`.
+fn item_line(skipped: &[usize], k: usize) -> usize {
+    let mut l = k;
+    for &s in skipped {
+        if s > l {
+            break;
+        }
+        l += 1;
+    }
+    l
+}
+
+/// Parses the lines of `text[a..b]` (whole lines) by `fast` (a line at the start of a
+/// slice: the item and the position of the line end, `None` to leave the line to the rest)
+/// or else by `parse` (with dummy line and item numbers) and `push`es the items into a new collection (`new(bytes)`), up to `limit`
+/// items or the first error.
+fn parse_piece<T, C, F, P, U>(
+    text: &[u8],
+    (a, b): (usize, usize),
+    limit: usize,
+    (fast, parse): (&F, &P),
+    items: C,
+    push: &U,
+) -> Piece<C>
+where
+    F: Fn(&[u8]) -> Option<(T, usize)>,
+    P: Fn(usize, &[u8], usize) -> Result<T>,
+    U: Fn(&mut C, T, usize),
+{
+    let mut p = Piece {
+        items,
+        n_items: 0,
+        skipped: Vec::new(),
+        lines: 0,
+        failed: None,
+    };
+    let mut s = a;
+    while s < b && p.n_items < limit {
+        if let Some((t, end)) = fast(&text[s..b]) {
+            push(&mut p.items, t, p.n_items);
+            p.n_items += 1;
+            p.lines += 1;
+            s += end + 1;
+            continue;
+        }
+        let e = find_nl(&text[s..b]).map_or(b, |k| s + k);
+        let line = trim_line_end(&text[s..e]);
+        if is_skippable(line) {
+            p.skipped.push(p.lines);
+        } else {
+            match parse(0, line, 0) {
+                Ok(t) => {
+                    push(&mut p.items, t, p.n_items);
+                    p.n_items += 1;
+                }
+                Err(_) => {
+                    p.failed = Some((p.lines, s, e));
+                    return p;
+                }
+            }
+        }
+        p.lines += 1;
+        s = e + 1;
+    }
+    p
+}
+
+/// Splits `range` of `text` into pieces of about `piece` bytes ending at line ends.
+fn split_pieces(text: &[u8], range: std::ops::Range<usize>, piece: usize) -> Vec<(usize, usize)> {
+    let mut out = Vec::with_capacity(range.len() / piece.max(1) + 1);
+    let mut a = range.start;
+    while a < range.end {
+        let mut b = (a + piece).min(range.end);
+        if b < range.end {
+            b = find_nl(&text[b..range.end]).map_or(range.end, |k| b + k + 1);
+        }
+        out.push((a, b));
+        a = b;
+    }
+    out
+}
+
+/// Reads the `n` item lines of a section, skipping comment and blank lines: the input is
+/// taken by blocks of whole lines, each block cut into pieces parsed in parallel
+/// (a line by `fast` if it takes it, else by `parse(line number, text, item index)`; the
+/// result must be the same), each item `push`ed into its piece's collection
+/// made by `new(piece bytes)`) while the next block is read (rayon::join); the pieces are
+/// then applied in line order (`apply(collection, items before it, line number of its k-th
+/// item)`), and the lines after the section's last item are given back to the input. The
+/// result and the first error reported are those of a sequential line-by-line read, for any
+/// thread count: a piece stops at its first failing line (or at the number of items still
+/// wanted), and that line is parsed again with its line and item numbers once the pieces
+/// before it are applied.
+#[allow(clippy::too_many_arguments)]
+fn read_section<R, T, C, F, P, N, U, A>(
     cx: &Ctx<'_>,
-    rd: &mut LineReader<R>,
+    inp: &mut Input<R>,
+    n: usize,
+    what: &str,
+    (fast, parse): (F, P),
+    new: N,
+    push: U,
+    mut apply: A,
+) -> Result<()>
+where
+    R: std::io::Read + Send,
+    C: Send,
+    F: Fn(&[u8]) -> Option<(T, usize)> + Sync,
+    P: Fn(usize, &[u8], usize) -> Result<T> + Sync,
+    N: Fn(usize) -> C + Sync,
+    U: Fn(&mut C, T, usize) + Sync,
+    A: FnMut(C, usize, &dyn Fn(usize) -> usize),
+{
+    if n == 0 {
+        return Ok(());
+    }
+    let piece_bytes = (inp.block / TAKES / PIECES).max(1);
+    let mut done = 0;
+    // Bytes wanted for the items still to read (at most a block): 64 per line, so that a
+    // short section (a marker) takes little more than its lines.
+    let want = |items: usize| items.saturating_mul(64);
+    let mut block = inp.take_block(cx.file, Vec::new(), want(n))?;
+    let mut spare = Vec::new();
+    loop {
+        if block.range.is_empty() {
+            return Err(Error::Truncated {
+                file: cx.file.to_string(),
+                at: Location::Line(inp.line + 1),
+                what: what.to_string(),
+            });
+        }
+        let limit = n - done;
+        // Read the next block alongside unless this one may well end the section (fewer
+        // than 16 bytes per remaining line).
+        let ahead = limit.saturating_mul(16) > block.range.len() && !inp.eof;
+        let pieces_at = split_pieces(&block.text, block.range.clone(), piece_bytes);
+        // The pieces' collections are made here, on the calling thread: allocations by the
+        // pool's threads (glibc gives each its own arena) left the allocator in a state that
+        // raised the peak resident memory of the later deformation by ~40 MB.
+        let outs: Vec<C> = pieces_at.iter().map(|&(a, b)| new(b - a)).collect();
+        let parse_block = || {
+            outs.into_par_iter()
+                .zip(&pieces_at)
+                .map(|(items, &ab)| {
+                    parse_piece(&block.text, ab, limit, (&fast, &parse), items, &push)
+                })
+                .collect::<Vec<_>>()
+        };
+        let (next, pieces) = if ahead {
+            let buf = std::mem::take(&mut spare);
+            let more = want(limit.saturating_sub(block.range.len() / 64));
+            let (next, pieces) = rayon::join(|| inp.take_block(cx.file, buf, more), parse_block);
+            (Some(next), pieces)
+        } else {
+            (None, parse_block())
+        };
+        for (p, &(a, _)) in pieces.into_iter().zip(&pieces_at) {
+            let base = inp.line + 1;
+            let n_items = p.n_items;
+            apply(p.items, done, &|k| base + item_line(&p.skipped, k));
+            done += n_items;
+            if done == n {
+                // Give back what follows the last item's line (and the block read ahead).
+                let used = item_line(&p.skipped, n_items - 1) + 1;
+                let mut s = a;
+                for _ in 0..used {
+                    s += find_nl(&block.text[s..block.range.end])
+                        .map_or(block.range.end - s, |k| k + 1);
+                }
+                inp.line += used;
+                let rest = &block.text[s..block.range.end];
+                match next {
+                    Some(Ok(nb)) => inp.unread(rest, &nb.text[nb.range]),
+                    Some(Err(_)) | None => inp.unread(rest, &[]),
+                }
+                return Ok(());
+            }
+            if let Some((k, a, b)) = p.failed {
+                let ln = base + k;
+                let line = trim_line_end(&block.text[a..b]);
+                return Err(match parse(ln, line, done) {
+                    Err(e) => e,
+                    Ok(_) => cx.err(ln, format!("{what}: line parsed differently on a retry")),
+                });
+            }
+            inp.line += p.lines;
+        }
+        spare = std::mem::replace(
+            &mut block,
+            match next {
+                Some(r) => r?,
+                None => inp.take_block(cx.file, spare, want(n - done))?,
+            },
+        )
+        .text;
+    }
+}
+
+/// The elements of one piece of a section and its largest node (node, local item index).
+struct ElementPiece {
+    /// The nodes of the elements in line order.
+    nodes: Vec<u32>,
+    /// Runs of elements of one kind: (kind, number of elements).
+    runs: Vec<(ElementKind, usize)>,
+    max: Option<(u32, usize)>,
+}
+
+/// Reads `n` element lines into `set` ([`read_section`]).
+fn read_elements<R: std::io::Read + Send>(
+    cx: &Ctx<'_>,
+    rd: &mut Input<R>,
     n: usize,
     dim: u8,
     set: &mut Elements,
     max: &mut MaxRef,
     section: &str,
 ) -> Result<()> {
-    let mut done = 0;
     read_section(
         cx,
         rd,
         n,
         section,
-        |ln, line, _| parse_element(cx, ln, line, dim),
-        |(kind, nodes), ln| {
-            let g = set.group_mut(kind);
-            if g.nodes.capacity() == 0 {
-                reserve_capped(&mut g.nodes, (n - done).saturating_mul(kind.n_nodes()));
+        (
+            |s: &[u8]| fast_element(s, dim),
+            |ln, line, _| parse_element(cx, ln, line, dim),
+        ),
+        // About 8 bytes per number on a line.
+        |bytes| ElementPiece {
+            nodes: Vec::with_capacity(bytes / 8),
+            runs: Vec::with_capacity(4),
+            max: None,
+        },
+        |piece, (kind, nodes), k| {
+            let nn = kind.n_nodes();
+            match piece.runs.last_mut() {
+                Some((last, count)) if *last == kind => *count += 1,
+                _ => piece.runs.push((kind, 1)),
             }
-            for &x in &nodes[..kind.n_nodes()] {
-                max.see(u64::from(x), ln);
+            extend_nodes(&mut piece.nodes, &nodes, nn);
+            let top = nodes[..nn].iter().copied().max().unwrap_or(0);
+            if piece.max.is_none_or(|(m, _)| top >= m) {
+                piece.max = Some((top, k));
             }
-            g.nodes.extend_from_slice(&nodes[..kind.n_nodes()]);
-            done += 1;
+        },
+        |piece, mut done, line_of| {
+            let mut at = 0;
+            for &(kind, count) in &piece.runs {
+                let g = set.group_mut(kind);
+                if g.nodes.capacity() == 0 {
+                    reserve_capped(&mut g.nodes, (n - done).saturating_mul(kind.n_nodes()));
+                }
+                let len = count * kind.n_nodes();
+                g.nodes.extend_from_slice(&piece.nodes[at..at + len]);
+                at += len;
+                done += count;
+            }
+            if let Some((node, k)) = piece.max {
+                max.see(u64::from(node), line_of(k));
+            }
         },
     )
+}
+
+/// Appends the first `nn` of `nodes` (copies of a size known at compile time for the
+/// element kinds).
+#[inline]
+fn extend_nodes(v: &mut Vec<u32>, nodes: &[u32; 8], nn: usize) {
+    match nn {
+        2 => v.extend_from_slice(&nodes[..2]),
+        3 => v.extend_from_slice(&nodes[..3]),
+        4 => v.extend_from_slice(&nodes[..4]),
+        5 => v.extend_from_slice(&nodes[..5]),
+        6 => v.extend_from_slice(&nodes[..6]),
+        8 => v.extend_from_slice(nodes),
+        _ => v.extend_from_slice(&nodes[..nn]),
+    }
 }
 
 /// Parses one point line of node `node`: `dim` finite coordinates, optionally the node's
@@ -360,9 +790,9 @@ fn parse_point(cx: &Ctx<'_>, ln: usize, line: &[u8], dim: u8, node: usize) -> Re
 }
 
 /// Reads `n` point lines into `coords` ([`read_section`]).
-fn read_points<R: BufRead + Send>(
+fn read_points<R: std::io::Read + Send>(
     cx: &Ctx<'_>,
-    rd: &mut LineReader<R>,
+    rd: &mut Input<R>,
     n: usize,
     dim: u8,
     coords: &mut Vec<[f64; 3]>,
@@ -373,13 +803,20 @@ fn read_points<R: BufRead + Send>(
         rd,
         n,
         "NPOIN",
-        |ln, line, node| parse_point(cx, ln, line, dim, node),
-        |p, _| coords.push(p),
+        (
+            |_: &[u8]| None,
+            |ln, line, node| parse_point(cx, ln, line, dim, node),
+        ),
+        // About 32 bytes per line at least (3 coordinates in full precision take ~60).
+        |bytes| Vec::with_capacity(bytes / 32),
+        |piece: &mut Vec<[f64; 3]>, p, _| piece.push(p),
+        |piece, _, _| coords.extend_from_slice(&piece),
     )
 }
 
-/// Reads an SU2 grid from `r`; `file` names the input in errors (`Send`: the next batch of
-/// lines is read on one thread while the last one is parsed on the others).
+/// Reads an SU2 grid from `r`; `file` names the input in errors (`Send`: the next block of
+/// lines is read on one thread while the last one is parsed on the others). The input is
+/// read in slices of 33 MiB (a `BufReader` passes such reads straight through).
 ///
 /// ```
 /// let txt = "NDIME= 2\nNELEM= 1\n5 0 1 2 0\nNPOIN= 3\n0 0 0\n1 0 1\n0 1 2\n\
@@ -389,9 +826,14 @@ fn read_points<R: BufRead + Send>(
 /// assert_eq!(m.markers[0].name, "wall");
 /// ```
 pub fn read<R: BufRead + Send>(r: R, file: &Path) -> Result<Mesh> {
+    read_by_blocks(r, file, READ_BYTES)
+}
+
+/// [`read`] reading the input by `block` bytes at once (sections taken by an eighth of it).
+fn read_by_blocks<R: std::io::Read + Send>(r: R, file: &Path, block: usize) -> Result<Mesh> {
     let file = file.display().to_string();
     let cx = Ctx { file: &file };
-    let mut rd = LineReader::new(r);
+    let mut rd = Input::new(r, block);
     let mut mesh = Mesh::new(0);
     let mut dim: Option<u8> = None;
     let (mut seen_elem, mut seen_poin, mut seen_mark) = (false, false, false);
@@ -574,26 +1016,44 @@ where
     F: Fn(usize, &mut Vec<u8>) + Sync,
 {
     let blocks = n.div_ceil(WRITE_BLOCK);
-    let mut texts: Vec<Vec<u8>> = Vec::new();
-    for first in (0..blocks).step_by(WRITE_BATCH) {
+    // Formats blocks `first..` of one batch into `texts` (its buffers reused).
+    let format = |first: usize, texts: &mut Vec<Vec<u8>>| {
         let last = (first + WRITE_BATCH).min(blocks);
-        (first..last)
-            .into_par_iter()
-            .map(|b| {
-                let lo = b * WRITE_BLOCK;
-                let hi = (lo + WRITE_BLOCK).min(n);
-                let mut out = Vec::with_capacity((hi - lo) * 48);
-                for i in lo..hi {
-                    line(i, &mut out);
-                }
-                out
-            })
-            .collect_into_vec(&mut texts);
-        for t in &texts {
-            w.write_all(t)?;
-        }
+        texts.resize_with(last - first, Vec::new);
+        texts.par_iter_mut().enumerate().for_each(|(k, out)| {
+            let lo = (first + k) * WRITE_BLOCK;
+            let hi = (lo + WRITE_BLOCK).min(n);
+            out.clear();
+            out.reserve((hi - lo) * 48);
+            for i in lo..hi {
+                line(i, out);
+            }
+        });
+    };
+    let (mut cur, mut next): (Vec<Vec<u8>>, Vec<Vec<u8>>) = (Vec::new(), Vec::new());
+    if blocks == 0 {
+        return Ok(());
     }
-    Ok(())
+    format(0, &mut cur);
+    let mut first = 0;
+    loop {
+        first += WRITE_BATCH;
+        // Write this batch on this thread while the next one is formatted on the others.
+        // (`in_place_scope`: the writer stays on this thread, so it need not be `Send`.)
+        let written = if first < blocks {
+            rayon::in_place_scope(|s| {
+                s.spawn(|_| format(first, &mut next));
+                cur.iter().try_for_each(|t| w.write_all(t))
+            })
+        } else {
+            cur.iter().try_for_each(|t| w.write_all(t))
+        };
+        written?;
+        if first >= blocks {
+            return Ok(());
+        }
+        std::mem::swap(&mut cur, &mut next);
+    }
 }
 
 /// Writes the element lines of `set` (code, nodes, and with `ids` the element's index).
@@ -623,8 +1083,9 @@ fn write_elements<W: Write + ?Sized>(set: &Elements, ids: bool, w: &mut W) -> st
 /// round-trip form, so reading back gives the same bits. Element ids follow the canonical
 /// kind order of [`Elements`]. [`Mesh::su2_extra`] is appended verbatim.
 ///
-/// The lines are formatted in parallel by blocks and written in order (the same bytes for
-/// any thread count).
+/// The lines are formatted in parallel by blocks and written in order, a batch of blocks
+/// being written on the calling thread while the next is formatted (the same bytes for any
+/// thread count).
 ///
 /// A 2-D grid whose nodes do not all have z = 0 is refused (SU2 2-D files carry x and y
 /// only), rather than silently flattened.
@@ -671,24 +1132,95 @@ mod tests {
     #[test]
     fn fast_integer_scan_accepts_only_plain_lines() {
         let mut v = [0u64; 10];
-        assert_eq!(scan_uints(b"10\t1 2  3 4\t5\r", &mut v), Some(6));
+        assert_eq!(scan_uints(b"10\t1 2  3 4\t5\r", &mut v), Some((6, 14)));
         assert_eq!(&v[..6], &[10, 1, 2, 3, 4, 5]);
-        assert_eq!(scan_uints(b"", &mut v), Some(0));
+        assert_eq!(scan_uints(b"", &mut v), Some((0, 0)));
         assert_eq!(scan_uints(b"5 -1 2", &mut v), None);
         assert_eq!(scan_uints(b"5 1.0 2", &mut v), None);
         assert_eq!(scan_uints(b"5 12345678901 2", &mut v), None);
+        assert_eq!(scan_uints(b"5 1234567890 2", &mut v), Some((3, 14)));
+        assert_eq!(v[1], 1_234_567_890);
+        assert_eq!(scan_uints(b"5 99999999999999999999999", &mut v), None);
         assert_eq!(scan_uints(b"1 2 3 4 5 6 7 8 9 10 11", &mut v), None);
+        // Stops at the line end.
+        assert_eq!(
+            scan_uints(b"10 123456789 7\r\n5 x\n", &mut v),
+            Some((3, 15))
+        );
+        assert_eq!(&v[..3], &[10, 123_456_789, 7]);
+    }
+
+    proptest::proptest! {
+        /// The scan equals splitting on separators and `str::parse::<u64>` for lines of
+        /// numbers (any lengths, so any alignment of the eight-byte steps) and refuses lines
+        /// with any other character.
+        #[test]
+        fn integer_scan_equals_str_parse(
+            nums in proptest::collection::vec((0u64..=9_999_999_999, 0usize..11, 0usize..3), 0..11),
+            junk in proptest::option::of((0usize..200, proptest::sample::select(b"x-+.e,;\x00\xff:/".to_vec()))),
+            tail in proptest::sample::select(vec!["", "\n", "\r\n", "\n7 7"]),
+        ) {
+            let mut line = String::new();
+            for &(x, zeros, sep) in &nums {
+                line.push_str(["\t", " ", "  \t"][sep]);
+                line.push_str(&"0".repeat(zeros));
+                line.push_str(&x.to_string());
+            }
+            let mut b = line.clone().into_bytes();
+            let junk_at = junk.map(|(at, c)| {
+                let at = at % (b.len() + 1);
+                b.insert(at, c);
+                at
+            });
+            b.extend_from_slice(tail.as_bytes());
+            let end = b.iter().position(|&c| c == b'\n').unwrap_or(b.len());
+            let mut v = [0u64; 10];
+            let got = scan_uints(&b, &mut v);
+            let want: Option<Vec<u64>> = std::str::from_utf8(&b[..end])
+                .ok()
+                .and_then(|t| {
+                    t.split(['\t', ' ', '\r'])
+                        .filter(|w| !w.is_empty())
+                        .map(|w| {
+                            (w.len() <= 10 && w.bytes().all(|c| c.is_ascii_digit()))
+                                .then(|| w.parse::<u64>().ok())
+                                .flatten()
+                        })
+                        .collect()
+                });
+            // (Every junk character is neither a digit nor a separator.)
+            proptest::prop_assert!(junk_at.is_none() || want.is_none());
+            match want {
+                Some(w) => {
+                    proptest::prop_assert_eq!(got, Some((w.len(), end)));
+                    proptest::prop_assert_eq!(&v[..w.len()], &w[..]);
+                }
+                _ => proptest::prop_assert_eq!(got, None),
+            }
+        }
+
+        /// Eight digits at once equal the decimal value.
+        #[test]
+        fn eight_digits_equal_str_parse(x in 0u64..100_000_000, run in 1usize..9) {
+            let x = x % 10u64.pow(run as u32);
+            let txt = format!("{x:0run$}");
+            let mut t = 0u64;
+            for (j, c) in txt.bytes().enumerate() {
+                t |= u64::from(c - b'0') << (8 * j);
+            }
+            proptest::prop_assert_eq!(eight_digits(t << (8 * (8 - run))), x);
+        }
     }
 
     #[test]
     fn parallel_write_and_read_span_several_blocks_and_batches() {
         // 162 000 tetrahedra (more than WRITE_BLOCK × WRITE_BATCH lines), 29 791 points
-        // (more than one read batch), irrational coordinates.
+        // (the whole file is more than one block of a section), irrational coordinates.
         let mut m = crate::generate::box_tets(30, 30, 30, [0.0; 3], [1.0, 0.7, 1.3]);
         for (i, p) in m.coords.iter_mut().enumerate() {
             p[0] += 1e-3 * (i as f64).sin();
         }
-        assert!(m.cells.len() > WRITE_BLOCK * WRITE_BATCH && m.n_nodes() > BATCH);
+        assert!(m.cells.len() > WRITE_BLOCK * WRITE_BATCH);
         let text = |threads: usize| {
             testkit::with_threads(threads, || {
                 let mut out = Vec::new();
@@ -715,6 +1247,13 @@ mod tests {
         let back = read(&one[..], "t.su2".as_ref()).unwrap();
         assert_eq!(back.coords, m.coords);
         assert_eq!(back.cells, m.cells);
+        // Small blocks (many pieces and blocks per section), any thread count.
+        for threads in [1, 3] {
+            let small = testkit::with_threads(threads, || {
+                read_by_blocks(&one[..], "t.su2".as_ref(), 1000).unwrap()
+            });
+            assert_eq!(small, back);
+        }
         // An error in a later read batch names the node and line of a sequential read.
         let mut bad = String::from_utf8(one).unwrap();
         let target = format!("\t{}\n", 20_000);
@@ -730,5 +1269,103 @@ mod tests {
             e.contains(&format!("line {line_no}")) && e.contains("node 20000"),
             "{e}"
         );
+    }
+
+    /// A small grid's SU2 text with comment and blank lines inserted after the lines in
+    /// `at` (indices modulo the line count), optionally with CRLF line ends.
+    fn text_with_noise(at: &[usize], crlf: bool) -> Vec<u8> {
+        let mut m = crate::generate::box_tets(3, 2, 2, [0.0; 3], [1.0, 0.3, 0.7]);
+        m.su2_extra = "FFD_NBOX= 0\nFFD_NLEVEL= 0\n".into();
+        let mut t = Vec::new();
+        write(&m, &mut t).unwrap();
+        let lines: Vec<&[u8]> = t.split(|&c| c == b'\n').collect();
+        let n = lines.len() - 1;
+        let mut out = Vec::new();
+        for (k, l) in lines[..n].iter().enumerate() {
+            out.extend_from_slice(l);
+            out.extend_from_slice(if crlf { b"\r\n" } else { b"\n" });
+            for (j, &a) in at.iter().enumerate() {
+                if a % n == k {
+                    out.extend_from_slice(if j % 2 == 0 { b"% note\n" } else { b" \t \n" });
+                }
+            }
+        }
+        out
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+
+        /// Reading by tiny blocks (many blocks and pieces per section, sections ending
+        /// inside blocks, lines given back) gives the grid, or the first error, of a read in
+        /// one block and one piece (line by line), for any thread count.
+        #[test]
+        fn tiny_blocks_read_like_one_block(
+            at in proptest::collection::vec(0usize..400, 0..6),
+            crlf: bool,
+            block in 1usize..400,
+            threads in 1usize..4,
+            bad in proptest::option::of((0usize..400, 0usize..40, 0usize..4)),
+        ) {
+            let mut text = text_with_noise(&at, crlf);
+            if let Some((line, col, what)) = bad {
+                // Damage one character of one line.
+                let starts: Vec<usize> = std::iter::once(0)
+                    .chain(text.iter().enumerate().filter(|(_, c)| **c == b'\n').map(|(i, _)| i + 1))
+                    .filter(|&i| i < text.len())
+                    .collect();
+                let a = starts[line % starts.len()];
+                let len = text[a..].iter().position(|&c| c == b'\n').unwrap_or(text.len() - a);
+                if len > 0 {
+                    text[a + col % len] = [b'x', b'-', b' ', b'9'][what];
+                }
+            }
+            // (One block, one piece: the text is ~4 kB.)
+            let whole = read_by_blocks(&text[..], "t.su2".as_ref(), 1 << 20);
+            let small = testkit::with_threads(threads, || {
+                read_by_blocks(&text[..], "t.su2".as_ref(), block)
+            });
+            match (whole, small) {
+                (Ok(a), Ok(b)) => proptest::prop_assert_eq!(a, b),
+                (Err(a), Err(b)) => proptest::prop_assert_eq!(a.to_string(), b.to_string()),
+                (a, b) => proptest::prop_assert!(false, "{:?} vs {:?}", a.map(|_| ()), b.map(|_| ())),
+            }
+        }
+    }
+
+    #[test]
+    fn noise_lines_and_crlf_keep_the_grid_and_line_numbers() {
+        let clean = read(&text_with_noise(&[], false)[..], "t.su2".as_ref()).unwrap();
+        let noisy = text_with_noise(&[0, 5, 40, 41, 100, 150], true);
+        for block in [7, 64, 1 << 20] {
+            let m = read_by_blocks(&noisy[..], "t.su2".as_ref(), block).unwrap();
+            assert_eq!(m.coords, clean.coords);
+            assert_eq!(m.cells, clean.cells);
+            assert_eq!(m.markers, clean.markers);
+            assert_eq!(m.su2_extra, clean.su2_extra);
+        }
+        // An error names the line counted here, comments and blank lines included.
+        let mut bad = noisy.clone();
+        let npoin = bad.windows(6).position(|w| w == b"NPOIN=").unwrap();
+        let third = npoin
+            + bad[npoin..]
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| **c == b'\n')
+                .nth(2)
+                .unwrap()
+                .0
+            + 1;
+        bad[third] = b'#';
+        let line_no = bad[..third].iter().filter(|&&c| c == b'\n').count() + 1;
+        for block in [7, 64, 1 << 20] {
+            let e = read_by_blocks(&bad[..], "t.su2".as_ref(), block)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with(&format!("t.su2: line {line_no}: node ")),
+                "{e}"
+            );
+        }
     }
 }
