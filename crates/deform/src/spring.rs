@@ -479,12 +479,15 @@ impl RadixHeap {
     }
 }
 
+/// The stiffness evaluator at `x`; for [`Stiffness::WallDistance`], `distance` is the
+/// wall distance when already computed ([`edge_distance`] of `adj`, `x`, `moving`).
 fn springs<'a>(
     mesh: &Mesh,
     x: &'a [[f64; 3]],
     kind: Stiffness,
     adj: &Adjacency,
     moving: &[bool],
+    distance: Option<Vec<f64>>,
 ) -> Springs<'a> {
     let mut vol_factor = Vec::new();
     let mut wall_len = 0.0;
@@ -503,7 +506,7 @@ fn springs<'a>(
         let diag =
             ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
         wall_len = if diag.is_finite() { scale * diag } else { 0.0 };
-        vol_factor = edge_distance(adj, x, moving);
+        vol_factor = distance.unwrap_or_else(|| edge_distance(adj, x, moving));
     }
     if kind == Stiffness::Volume {
         let n = x.len();
@@ -800,7 +803,8 @@ struct Base {
 }
 
 impl Base {
-    /// Springs at `x`, assembly of A and its preconditioner.
+    /// Springs at `x`, assembly of A and its preconditioner; `distance`: the wall distance
+    /// at `x` when already computed (see [`springs`]).
     #[allow(clippy::too_many_arguments)]
     fn new(
         mesh: &Mesh,
@@ -810,6 +814,7 @@ impl Base {
         x: &[[f64; 3]],
         opts: &DeformOptions,
         times: &mut PhaseTimes,
+        distance: Option<Vec<f64>>,
     ) -> Result<Self> {
         let t = Instant::now();
         let moving: Vec<bool> = if opts.stiffness == Stiffness::WallDistance {
@@ -821,7 +826,7 @@ impl Base {
             Vec::new()
         };
         let mut tt = Instant::now();
-        let sp = springs(mesh, x, opts.stiffness, adj, &moving);
+        let sp = springs(mesh, x, opts.stiffness, adj, &moving, distance);
         tr("springs", &mut tt);
         let a = assemble(sys, adj, &sp)?;
         let couplings = couplings(sys, adj, &sp);
@@ -974,7 +979,7 @@ fn step(
     let base = match base {
         Some(b) => b,
         None => {
-            owned = Base::new(mesh, cls, sys, adj, cur, opts, times)?;
+            owned = Base::new(mesh, cls, sys, adj, cur, opts, times, None)?;
             &owned
         }
     };
@@ -1565,12 +1570,20 @@ impl<'s> Deformer<'s> {
         progress("setup", 0, 1);
         let renumber = opts.renumber && mesh.n_nodes() >= 2;
         let mut tt = Instant::now();
-        let (mut m2, mut bc2, mut sup2, mut perm, mut inv) = if renumber {
+        let (mut m2, mut bc2, mut sup2, mut perm, mut inv, moving) = if renumber {
             // Validate in the user's numbering first, so that errors name the user's nodes.
-            classify(mesh, bc, opts.plane_rel_tol, sup)?;
+            let c1 = classify(mesh, bc, opts.plane_rel_tol, sup)?;
             tr("classify1", &mut tt);
             let perm = spatial_order(&mesh.coords);
             tr("morton", &mut tt);
+            // The moving nodes (sources of the wall distance), in Morton numbering.
+            let mut moving = Vec::new();
+            if opts.stiffness == Stiffness::WallDistance {
+                moving = vec![false; perm.len()];
+                for (r, &p) in c1.roles.iter().zip(&perm) {
+                    moving[p as usize] = matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_));
+                }
+            }
             let mut m2 = mesh.clone();
             tr("clone", &mut tt);
             m2.renumber_nodes(&perm).map_err(|e| Error::BadGraph {
@@ -1598,20 +1611,51 @@ impl<'s> Deformer<'s> {
             for (old, &new) in perm.iter().enumerate() {
                 inv[new as usize] = old as u32;
             }
-            (m2, bc2, sup2, Some(perm), inv)
+            (m2, bc2, sup2, Some(perm), inv, moving)
         } else {
-            (mesh.clone(), bc.clone(), sup.cloned(), None, Vec::new())
+            let m2 = mesh.clone();
+            (m2, bc.clone(), sup.cloned(), None, Vec::new(), Vec::new())
         };
         tt = Instant::now();
+        if m2.cells.len() > mesh::adjacency::MAX_ELEMENTS {
+            return Err(Error::BadGraph {
+                reason: format!(
+                    "{} cells: at most {} are supported",
+                    m2.cells.len(),
+                    mesh::adjacency::MAX_ELEMENTS
+                ),
+            });
+        }
         let mut adj = Adjacency::build(&m2);
         tr("adjacency", &mut tt);
+        // The wall distance of the set-up's springs, when computed beside the level order.
+        let mut distance = None;
         if let Some(perm) = perm.as_mut() {
-            // Then breadth-first order (see `level_order`): node k → level[k].
-            let level = level_order(&adj);
+            // Then breadth-first order (see `level_order`): node k → level[k]. The wall
+            // distance (a sequential Dijkstra) runs beside it on the Morton-numbered grid: it
+            // does not depend on the numbering (a node's distance is the smallest d + l of
+            // its neighbours, the same sums in any order), so it is the one `springs` would
+            // compute, permuted.
+            let (d, (level, permuted)) = rayon::join(
+                || (!moving.is_empty()).then(|| edge_distance(&adj, &m2.coords, &moving)),
+                || {
+                    let level = level_order(&adj);
+                    let permuted = permuted_adjacency(&adj, &level);
+                    (level, permuted)
+                },
+            );
+            drop(moving);
             m2.renumber_nodes(&level).map_err(|e| Error::BadGraph {
                 reason: e.to_string(),
             })?;
-            adj = permuted_adjacency(&adj, &level);
+            adj = permuted;
+            distance = d.map(|d| {
+                let mut out = vec![0.0; d.len()];
+                for (&l, v) in level.iter().zip(d) {
+                    out[l as usize] = v;
+                }
+                out
+            });
             for (v, _) in &mut bc2.displacements {
                 *v = level[*v as usize];
             }
@@ -1633,26 +1677,23 @@ impl<'s> Deformer<'s> {
         let sys = build_system(&cls, &adj);
         tr("build_system", &mut tt);
         times.setup = t.elapsed().as_secs_f64();
-        // The initial quality runs beside the springs and the assembly (the wall distance of
-        // Stiffness::WallDistance is a sequential Dijkstra that leaves a core free): the
-        // two phases' seconds overlap.
-        let (base, (before, t_quality)) = rayon::join(
-            || {
-                if sys.node_of.is_empty() {
-                    Ok(None)
-                } else {
-                    Base::new(&m2, &cls, &sys, &adj, &m2.coords, opts, &mut times).map(Some)
-                }
-            },
-            || {
-                let t = Instant::now();
-                let q0 = cell_quality(&m2, &m2.coords);
-                (QualitySummary::of(&q0), t.elapsed().as_secs_f64())
-            },
-        );
-        let base = base.map_err(|e| e.renumbered(&inv))?;
-        times.quality += t_quality;
-        tr("quality and base", &mut tt);
+        let t = Instant::now();
+        tt = Instant::now();
+        let q0 = cell_quality(&m2, &m2.coords);
+        tr("quality", &mut tt);
+        let before = QualitySummary::of(&q0);
+        tr("summary", &mut tt);
+        times.quality += t.elapsed().as_secs_f64();
+        let base = if sys.node_of.is_empty() {
+            None
+        } else {
+            Some(
+                Base::new(
+                    &m2, &cls, &sys, &adj, &m2.coords, opts, &mut times, distance,
+                )
+                .map_err(|e| e.renumbered(&inv))?,
+            )
+        };
         Ok(Self {
             mesh: m2,
             perm,

@@ -423,13 +423,21 @@ impl Mesh {
         (lo, hi)
     }
 
-    /// Checks the invariants: dimension 2 or 3, node indices in range, cells of dimension
+    /// Checks the invariants: dimension 2 or 3, at most [`crate::adjacency::MAX_ELEMENTS`]
+    /// cells, node indices in range, cells of dimension
     /// `dim`, marker elements of dimension `dim - 1`, entity arrays empty or one per
     /// element, classification one per node with dimension ≤ 3, finite coordinates.
     pub fn validate(&self) -> Result<()> {
         let bad = |what: String| Err(Error::Invalid { what });
         if self.dim != 2 && self.dim != 3 {
             return bad(format!("dimension {} (expected 2 or 3)", self.dim));
+        }
+        if self.cells.len() > crate::adjacency::MAX_ELEMENTS {
+            return bad(format!(
+                "{} cells: at most {} are supported",
+                self.cells.len(),
+                crate::adjacency::MAX_ELEMENTS
+            ));
         }
         let n = self.coords.len();
         if let Some((i, _)) = self
