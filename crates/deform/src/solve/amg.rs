@@ -105,6 +105,8 @@ struct Scratch {
     /// Residual and correction of the repeated cycles (empty with one cycle).
     r: Vec<V3>,
     d: Vec<V3>,
+    /// The restriction's [`LANES`] partial sums of this level's right-hand side.
+    lanes: Vec<Vec<V3>>,
 }
 
 /// Summary of a hierarchy.
@@ -170,6 +172,7 @@ impl<'a, T: Entry> Amg<'a, T> {
                 x: vec![[0.0; 3]; n],
                 r: vec![[0.0; 3]; more],
                 d: vec![[0.0; 3]; more],
+                lanes: vec![vec![[0.0; 3]; n]; LANES],
             });
         }
         scratch.push(Scratch {
@@ -178,6 +181,7 @@ impl<'a, T: Entry> Amg<'a, T> {
             x: Vec::new(),
             r: Vec::new(),
             d: Vec::new(),
+            lanes: vec![vec![[0.0; 3]; nc]; LANES],
         });
         Ok(Self {
             fine,
@@ -245,7 +249,7 @@ impl<'a, T: Entry> Amg<'a, T> {
         let (next, rest) = deeper
             .split_first_mut()
             .expect("one scratch per level below the finest");
-        restrict_residual(a, &lev.p, b, x, &mut next.b);
+        restrict_residual(a, &lev.p, b, x, &mut next.b, &mut next.lanes);
         // coarse[l] is the matrix of level l + 1.
         let ac = &self.coarse[l];
         self.vcycle(ac, l + 1, &next.b, &mut next.out, &mut next.x, rest);
@@ -428,63 +432,60 @@ impl Transfer {
     }
 }
 
-/// y ← Pᵀ (b − A x), without storing the residual nor Pᵀ: each chunk of [`CHUNK`] fine rows
-/// computes its residual rows and adds P's row i times r_i into a dense accumulator over the
-/// coarse unknowns, drained as a sorted sparse list; the lists are added into y in chunk
-/// order. Every coarse entry sums its terms in a fixed order (fine rows increasing), so the
-/// result does not depend on the thread count. The residual streams through the fine rows
-/// once and P is read in its storage order (the gathers of a stored restriction, whose rows
-/// reach across the aggregates' fine rows, were the slow part).
-fn restrict_residual<M: Entry>(a: &SymMatrix<M>, p: &Transfer, b: &[V3], x: &[V3], y: &mut [V3]) {
+/// Fixed number of partial sums of the restriction (independent of the thread count).
+const LANES: usize = 4;
+
+/// y ← Pᵀ (b − A x), without storing the residual nor Pᵀ: the fine rows are cut into
+/// [`LANES`] fixed ranges (whole chunks of [`CHUNK`] rows); each range computes its residual
+/// rows in order and adds P's row i times r_i into its own dense coarse vector of `lanes`;
+/// y is the sum of the lanes in lane order. Every coarse entry sums its terms in a fixed
+/// order, so the result does not depend on the thread count. The residual streams through
+/// the fine rows once and P is read in its storage order (the gathers of a stored
+/// restriction, whose rows reach across the aggregates' fine rows, were the slow part).
+fn restrict_residual<M: Entry>(
+    a: &SymMatrix<M>,
+    p: &Transfer,
+    b: &[V3],
+    x: &[V3],
+    y: &mut [V3],
+    lanes: &mut [Vec<V3>],
+) {
     let n = a.n();
-    let nc = y.len();
-    let parts: Vec<Vec<(u32, V3)>> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map_init(
-            || (vec![[0.0; 3]; nc], vec![false; nc], Vec::<u32>::new()),
-            |(val, used, list), c| {
-                let lo = c * CHUNK;
-                let hi = (lo + CHUNK).min(n);
-                a.rows_mul(lo, hi, x, |i, v| {
-                    let r = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
-                    let span = p.offsets[i]..p.offsets[i + 1];
-                    for (&col, &w) in p.cols[span.clone()].iter().zip(&p.vals[span]) {
-                        let (w, ci) = (f64::from(w), col as usize);
-                        let t = [w * r[0], w * r[1], w * r[2]];
-                        if used[ci] {
-                            let e = &mut val[ci];
-                            e[0] += t[0];
-                            e[1] += t[1];
-                            e[2] += t[2];
-                        } else {
-                            used[ci] = true;
-                            val[ci] = t;
-                            list.push(col);
-                        }
-                    }
-                });
-                list.sort_unstable();
-                let out = list
-                    .iter()
-                    .map(|&ci| {
-                        used[ci as usize] = false;
-                        (ci, val[ci as usize])
-                    })
-                    .collect();
-                list.clear();
-                out
-            },
-        )
-        .collect();
-    y.fill([0.0; 3]);
-    for part in parts {
-        for (ci, v) in part {
-            let e = &mut y[ci as usize];
-            e[0] += v[0];
-            e[1] += v[1];
-            e[2] += v[2];
+    let chunks = n.div_ceil(CHUNK);
+    let nl = lanes.len();
+    lanes.par_iter_mut().enumerate().for_each(|(k, acc)| {
+        acc.fill([0.0; 3]);
+        let lo = (k * chunks / nl) * CHUNK;
+        let hi = (((k + 1) * chunks / nl) * CHUNK).min(n);
+        if lo >= hi {
+            return;
         }
-    }
+        a.rows_mul(lo, hi, x, |i, v| {
+            let r = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
+            let span = p.offsets[i]..p.offsets[i + 1];
+            for (&col, &w) in p.cols[span.clone()].iter().zip(&p.vals[span]) {
+                let w = f64::from(w);
+                let e = &mut acc[col as usize];
+                e[0] += w * r[0];
+                e[1] += w * r[1];
+                e[2] += w * r[2];
+            }
+        });
+    });
+    let lanes = &*lanes;
+    y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
+        let r0 = c * CHUNK;
+        for (k, yi) in ys.iter_mut().enumerate() {
+            let mut s = lanes[0][r0 + k];
+            for lane in &lanes[1..] {
+                let v = lane[r0 + k];
+                s[0] += v[0];
+                s[1] += v[1];
+                s[2] += v[2];
+            }
+            *yi = s;
+        }
+    });
 }
 
 /// y ← y + M x.
