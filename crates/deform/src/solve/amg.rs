@@ -181,7 +181,12 @@ impl<'a, T: Entry> Amg<'a, T> {
             x: Vec::new(),
             r: Vec::new(),
             d: Vec::new(),
-            lanes: vec![vec![[0.0; 3]; nc]; LANES],
+            // Without coarse levels nothing is restricted.
+            lanes: if levels.is_empty() {
+                Vec::new()
+            } else {
+                vec![vec![[0.0; 3]; nc]; LANES]
+            },
         });
         Ok(Self {
             fine,
