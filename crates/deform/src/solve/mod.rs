@@ -170,6 +170,40 @@ mod tests {
     }
 
     #[test]
+    fn multigrid_cycles_are_symmetric_positive_definite() {
+        // Three levels (the middle one repeated by the W-cycle): u · M v = v · M u, u · M u > 0.
+        let (a, _) = grid_system(21, 17, 15);
+        let vec_of = |seed: f64| -> Vec<V3> {
+            (0..a.n())
+                .map(|i| {
+                    let t = seed * (i as f64 + 1.0);
+                    [t.sin(), (1.3 * t).cos(), (0.7 * t).sin() * (0.2 * t).cos()]
+                })
+                .collect()
+        };
+        let (u, v) = (vec_of(0.37), vec_of(1.91));
+        for cycles in [1, 2, 3] {
+            let opts = AmgOptions {
+                max_coarse: 10,
+                coarse_cycles: cycles,
+                ..Default::default()
+            };
+            let m = Amg::new(&a, &opts).unwrap();
+            assert!(m.info().sizes.len() >= 3, "{:?}", m.info().sizes);
+            let (mut mu, mut mv) = (vec![[0.0; 3]; a.n()], vec![[0.0; 3]; a.n()]);
+            m.apply(&u, &mut mu);
+            m.apply(&v, &mut mv);
+            let (umv, vmu) = (vecops::dot(&u, &mv), vecops::dot(&v, &mu));
+            let scale = vecops::norm(&u) * vecops::norm(&mv);
+            assert!(
+                (umv - vmu).abs() <= 1e-12 * scale,
+                "{cycles}: {umv} vs {vmu}"
+            );
+            assert!(vecops::dot(&u, &mu) > 0.0 && vecops::dot(&v, &mv) > 0.0);
+        }
+    }
+
+    #[test]
     fn fused_preconditioner_dot_equals_the_separate_dot_bit_for_bit() {
         let (a, b) = grid_system(21, 17, 15);
         let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
