@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 use super::csr::{Csr, Entry, SymMatrix};
 use super::pcg::Preconditioner;
-use super::vecops::{CHUNK, V3, ordered_sum};
+use super::vecops::{CHUNK, V3, chunked_sum};
 use crate::error::{Error, Result};
 
 /// Multigrid setup options.
@@ -392,25 +392,19 @@ fn jacobi_sweep_into<M: Entry>(
     x: &[V3],
     out: &mut [V3],
 ) -> f64 {
-    let parts: Vec<f64> = out
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .map(|(c, os)| {
-            let r0 = c * CHUNK;
-            let mut s = 0.0;
-            a.rows_mul(r0, r0 + os.len(), x, |i, v| {
-                let bi = b[i];
-                let ri = [bi[0] - v[0], bi[1] - v[1], bi[2] - v[2]];
-                let wk = w.at(i);
-                let xi = x[i];
-                let o = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
-                s += bi[0] * o[0] + bi[1] * o[1] + bi[2] * o[2];
-                os[i - r0] = o;
-            });
-            s
-        })
-        .collect();
-    ordered_sum(parts)
+    chunked_sum(out, |r0, os| {
+        let mut s = 0.0;
+        a.rows_mul(r0, r0 + os.len(), x, |i, v| {
+            let bi = b[i];
+            let ri = [bi[0] - v[0], bi[1] - v[1], bi[2] - v[2]];
+            let wk = w.at(i);
+            let xi = x[i];
+            let o = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
+            s += bi[0] * o[0] + bi[1] * o[1] + bi[2] * o[2];
+            os[i - r0] = o;
+        });
+        s
+    })
 }
 
 /// A multigrid transfer operator (P or R = Pᵀ) in CSR form with single-precision values

@@ -14,7 +14,7 @@
 
 use rayon::prelude::*;
 
-use super::vecops::{CHUNK, V3, ordered_sum};
+use super::vecops::{CHUNK, V3, chunked_sum};
 use crate::error::{Error, Result};
 
 /// A node graph: for node i, its neighbours are `adj[offsets[i]..offsets[i + 1]]`.
@@ -298,39 +298,27 @@ impl<T: Entry> SymMatrix<T> {
     pub fn mul_dot(&self, x: &[V3], y: &mut [V3]) -> f64 {
         assert_eq!(x.len(), self.n());
         assert_eq!(y.len(), self.n());
-        let parts: Vec<f64> = y
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .map(|(c, ys)| {
-                let r0 = c * CHUNK;
-                let mut s = 0.0;
-                self.rows_mul(r0, r0 + ys.len(), x, |i, v| {
-                    ys[i - r0] = v;
-                    s += v[0] * x[i][0] + v[1] * x[i][1] + v[2] * x[i][2];
-                });
-                s
-            })
-            .collect();
-        ordered_sum(parts)
+        chunked_sum(y, |r0, ys| {
+            let mut s = 0.0;
+            self.rows_mul(r0, r0 + ys.len(), x, |i, v| {
+                ys[i - r0] = v;
+                s += v[0] * x[i][0] + v[1] * x[i][1] + v[2] * x[i][2];
+            });
+            s
+        })
     }
 
     /// r ← b − A x, returns |r|² (deterministic).
     pub fn residual(&self, b: &[V3], x: &[V3], r: &mut [V3]) -> f64 {
-        let parts: Vec<f64> = r
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .map(|(c, rs)| {
-                let r0 = c * CHUNK;
-                let mut s = 0.0;
-                self.rows_mul(r0, r0 + rs.len(), x, |i, v| {
-                    let ri = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
-                    rs[i - r0] = ri;
-                    s += ri[0] * ri[0] + ri[1] * ri[1] + ri[2] * ri[2];
-                });
-                s
-            })
-            .collect();
-        ordered_sum(parts)
+        chunked_sum(r, |r0, rs| {
+            let mut s = 0.0;
+            self.rows_mul(r0, r0 + rs.len(), x, |i, v| {
+                let ri = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
+                rs[i - r0] = ri;
+                s += ri[0] * ri[0] + ri[1] * ri[1] + ri[2] * ri[2];
+            });
+            s
+        })
     }
 
     /// The matrix with rows and columns renumbered: new index k is old index `perm[k]`.

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::csr::{Entry, SymMatrix};
-use super::vecops::{CHUNK, V3, axpy, dot, norm, ordered_sum, xpby};
+use super::vecops::{CHUNK, V3, axpy, chunked_sum, dot, norm, ordered_sum, xpby};
 
 /// A linear constraint on one unknown's 3-vector.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -108,22 +108,16 @@ impl Preconditioner for Jacobi {
     }
     /// z = D⁻¹ r and r · z in one pass.
     fn apply_dot(&self, r: &[V3], z: &mut [V3], _work: &mut [V3]) -> f64 {
-        let parts: Vec<f64> = z
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .map(|(c, zs)| {
-                let r0 = c * CHUNK;
-                let mut s = 0.0;
-                for (k, zi) in zs.iter_mut().enumerate() {
-                    let d = self.inv_diag[r0 + k];
-                    let ri = r[r0 + k];
-                    *zi = [d * ri[0], d * ri[1], d * ri[2]];
-                    s += ri[0] * zi[0] + ri[1] * zi[1] + ri[2] * zi[2];
-                }
-                s
-            })
-            .collect();
-        ordered_sum(parts)
+        chunked_sum(z, |r0, zs| {
+            let mut s = 0.0;
+            for (k, zi) in zs.iter_mut().enumerate() {
+                let d = self.inv_diag[r0 + k];
+                let ri = r[r0 + k];
+                *zi = [d * ri[0], d * ri[1], d * ri[2]];
+                s += ri[0] * zi[0] + ri[1] * zi[1] + ri[2] * zi[2];
+            }
+            s
+        })
     }
     fn name(&self) -> &'static str {
         "jacobi"
@@ -308,21 +302,16 @@ impl<'b> ProjectedRhs<'b> {
 
 /// r ← r − α q, returns |r|².
 fn update_residual(alpha: f64, q: &[V3], r: &mut [V3]) -> f64 {
-    let parts: Vec<f64> = r
-        .par_chunks_mut(CHUNK)
-        .zip(q.par_chunks(CHUNK))
-        .map(|(cr, cq)| {
-            let mut s = 0.0;
-            for (ri, qi) in cr.iter_mut().zip(cq) {
-                for k in 0..3 {
-                    ri[k] -= alpha * qi[k];
-                }
-                s += ri[0] * ri[0] + ri[1] * ri[1] + ri[2] * ri[2];
+    chunked_sum(r, |r0, cr| {
+        let mut s = 0.0;
+        for (ri, qi) in cr.iter_mut().zip(&q[r0..]) {
+            for k in 0..3 {
+                ri[k] -= alpha * qi[k];
             }
-            s
-        })
-        .collect();
-    ordered_sum(parts)
+            s += ri[0] * ri[0] + ri[1] * ri[1] + ri[2] * ri[2];
+        }
+        s
+    })
 }
 
 /// The paper's point iteration (Eqs. 22–24) in Jacobi form: Δx_i ← Δx_i + ω (b_i − (A Δx)_i)

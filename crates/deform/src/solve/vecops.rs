@@ -18,6 +18,21 @@ pub(crate) fn ordered_sum(parts: Vec<f64>) -> f64 {
     parts.into_iter().fold(0.0, |a, b| a + b)
 }
 
+/// Runs `f(first index, chunk)` on the fixed chunks of [`CHUNK`] entries of `out` in
+/// parallel and adds the values it returns in chunk order: the reduction of every fused
+/// kernel that writes a vector and sums over it (deterministic for any thread count).
+pub(crate) fn chunked_sum<F>(out: &mut [V3], f: F) -> f64
+where
+    F: Fn(usize, &mut [V3]) -> f64 + Sync + Send,
+{
+    let parts: Vec<f64> = out
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .map(|(c, os)| f(c * CHUNK, os))
+        .collect();
+    ordered_sum(parts)
+}
+
 /// Σ_i a_i · b_i over all nodes and components.
 pub fn dot(a: &[V3], b: &[V3]) -> f64 {
     assert_eq!(a.len(), b.len());
