@@ -205,10 +205,7 @@ fn node_orders(m: &Mesh, a: &SymMatrix<f32>) {
     let t = Instant::now();
     let rcm = mesh::order::reverse_cuthill_mckee(adj.n_nodes(), |i| adj.neighbours(i));
     let t_rcm = t.elapsed().as_secs_f64();
-    let mut inv = vec![0u32; rcm.len()];
-    for (k, &o) in rcm.iter().enumerate() {
-        inv[o as usize] = k as u32;
-    }
+    let inv = deform::solve::order::inverse(&rcm);
     let composed: Vec<u32> = morton.iter().map(|&p| inv[p as usize]).collect();
     report("morton + RCM", &composed, t_morton + t_rcm);
 }

@@ -30,6 +30,7 @@ use serde::Serialize;
 use crate::bc::{BoundaryConditions, Classified, NodeRole, PlaneInfo, classify};
 use crate::error::{Error, Result};
 use crate::rotation::{frame, rotation_from_frame};
+use crate::solve::order::inverse;
 use crate::solve::vecops::{CHUNK, V3, norm};
 use crate::solve::{
     Amg, AmgInfo, AmgOptions, Constraints, Csr, Jacobi, SolveOptions, SolveReport, SymMatrix, pcg,
@@ -1382,21 +1383,14 @@ pub fn level_order(adj: &Adjacency) -> Vec<u32> {
             }
         }
     }
-    let mut perm = vec![0u32; n];
-    for (new, &old) in order.iter().enumerate() {
-        perm[old as usize] = new as u32;
-    }
-    perm
+    inverse(&order)
 }
 
 /// The adjacency of the grid renumbered by `perm` (node `i` → `perm[i]`), rows sorted; the
 /// same as [`Adjacency::build`] on the renumbered grid.
 fn permuted_adjacency(adj: &Adjacency, perm: &[u32]) -> Adjacency {
     let n = adj.n_nodes();
-    let mut old_of = vec![0u32; n];
-    for (old, &new) in perm.iter().enumerate() {
-        old_of[new as usize] = old as u32;
-    }
+    let old_of = inverse(perm);
     let mut offsets = Vec::with_capacity(n + 1);
     offsets.push(0usize);
     let mut total = 0;
@@ -1425,6 +1419,30 @@ fn permuted_adjacency(adj: &Adjacency, perm: &[u32]) -> Adjacency {
         }
     });
     Adjacency { offsets, indices }
+}
+
+/// Renumbers the set-up's grid, boundary conditions and support nodes: node `i` becomes
+/// `perm[i]` (support entries of nodes outside the grid are dropped: classification has
+/// refused them wherever supports are used).
+fn renumber_set_up(
+    m: &mut Mesh,
+    bc: &mut BoundaryConditions,
+    sup: &mut Option<Supports>,
+    perm: &[u32],
+) -> Result<()> {
+    m.renumber_nodes(perm).map_err(|e| Error::BadGraph {
+        reason: e.to_string(),
+    })?;
+    for (v, _) in &mut bc.displacements {
+        *v = perm[*v as usize];
+    }
+    if let Some(sp) = sup {
+        sp.nodes.retain(|(v, _)| (*v as usize) < perm.len());
+        for (v, _) in &mut sp.nodes {
+            *v = perm[*v as usize];
+        }
+    }
+    Ok(())
 }
 
 /// [`deform`] calling `progress(phase, done, total)` as it goes.
@@ -1570,7 +1588,9 @@ impl<'s> Deformer<'s> {
         progress("setup", 0, 1);
         let renumber = opts.renumber && mesh.n_nodes() >= 2;
         let mut tt = Instant::now();
-        let (mut m2, mut bc2, mut sup2, mut perm, mut inv, moving) = if renumber {
+        let (mut m2, mut bc2, mut sup2) = (mesh.clone(), bc.clone(), sup.cloned());
+        tr("clone", &mut tt);
+        let (mut perm, moving) = if renumber {
             // Validate in the user's numbering first, so that errors name the user's nodes.
             let c1 = classify(mesh, bc, opts.plane_rel_tol, sup)?;
             tr("classify1", &mut tt);
@@ -1584,37 +1604,11 @@ impl<'s> Deformer<'s> {
                     moving[p as usize] = matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_));
                 }
             }
-            let mut m2 = mesh.clone();
-            tr("clone", &mut tt);
-            m2.renumber_nodes(&perm).map_err(|e| Error::BadGraph {
-                reason: e.to_string(),
-            })?;
+            renumber_set_up(&mut m2, &mut bc2, &mut sup2, &perm)?;
             tr("renumber", &mut tt);
-            let bc2 = BoundaryConditions {
-                markers: bc.markers.clone(),
-                displacements: bc
-                    .displacements
-                    .iter()
-                    .map(|&(v, d)| (perm[v as usize], d))
-                    .collect(),
-            };
-            let sup2 = sup.map(|sp| Supports {
-                db: sp.db,
-                nodes: sp
-                    .nodes
-                    .iter()
-                    .filter(|(v, _)| (*v as usize) < perm.len())
-                    .map(|&(v, s)| (perm[v as usize], s))
-                    .collect(),
-            });
-            let mut inv = vec![0u32; perm.len()];
-            for (old, &new) in perm.iter().enumerate() {
-                inv[new as usize] = old as u32;
-            }
-            (m2, bc2, sup2, Some(perm), inv, moving)
+            (Some(perm), moving)
         } else {
-            let m2 = mesh.clone();
-            (m2, bc.clone(), sup.cloned(), None, Vec::new(), Vec::new())
+            (None, Vec::new())
         };
         tt = Instant::now();
         if m2.cells.len() > mesh::adjacency::MAX_ELEMENTS {
@@ -1645,9 +1639,7 @@ impl<'s> Deformer<'s> {
                 },
             );
             drop(moving);
-            m2.renumber_nodes(&level).map_err(|e| Error::BadGraph {
-                reason: e.to_string(),
-            })?;
+            renumber_set_up(&mut m2, &mut bc2, &mut sup2, &level)?;
             adj = permuted;
             distance = d.map(|d| {
                 let mut out = vec![0.0; d.len()];
@@ -1656,22 +1648,13 @@ impl<'s> Deformer<'s> {
                 }
                 out
             });
-            for (v, _) in &mut bc2.displacements {
-                *v = level[*v as usize];
-            }
-            if let Some(sp) = sup2.as_mut() {
-                for (v, _) in &mut sp.nodes {
-                    *v = level[*v as usize];
-                }
-            }
             for p in perm.iter_mut() {
                 *p = level[*p as usize];
             }
-            for (old, &new) in perm.iter().enumerate() {
-                inv[new as usize] = old as u32;
-            }
             tr("level order", &mut tt);
         }
+        // Solver node → input node.
+        let inv = perm.as_deref().map_or_else(Vec::new, inverse);
         let cls = classify(&m2, &bc2, opts.plane_rel_tol, sup2.as_ref())?;
         tr("classify2", &mut tt);
         let sys = build_system(&cls, &adj);

@@ -325,10 +325,7 @@ impl<T: Entry> SymMatrix<T> {
     pub fn permuted(&self, perm: &[u32]) -> Self {
         let n = self.n();
         assert_eq!(perm.len(), n);
-        let mut inv = vec![0u32; n];
-        for (k, &o) in perm.iter().enumerate() {
-            inv[o as usize] = k as u32;
-        }
+        let inv = super::order::inverse(perm);
         let mut offsets = vec![0usize; n + 1];
         for k in 0..n {
             let o = perm[k] as usize;

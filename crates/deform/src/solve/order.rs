@@ -10,19 +10,25 @@ pub fn reverse_cuthill_mckee(g: &Graph) -> Vec<u32> {
     mesh::order::reverse_cuthill_mckee(g.len(), |i| g.neighbours(i))
 }
 
+/// The inverse of a permutation: `inverse(p)[p[i] as usize] == i`.
+pub fn inverse(perm: &[u32]) -> Vec<u32> {
+    let mut inv = vec![0u32; perm.len()];
+    for (i, &p) in perm.iter().enumerate() {
+        inv[p as usize] = i as u32;
+    }
+    inv
+}
+
 /// Bandwidth max_i max_{j ∈ N(i)} |i − j| of a graph under a permutation (diagnostics).
 pub fn bandwidth(g: &Graph, perm: &[u32]) -> usize {
-    let mut inv = vec![0usize; perm.len()];
-    for (k, &o) in perm.iter().enumerate() {
-        inv[o as usize] = k;
-    }
+    let inv = inverse(perm);
     let mut bw = 0;
     for i in 0..g.len() {
         for &j in g.neighbours(i) {
             bw = bw.max(inv[i].abs_diff(inv[j as usize]));
         }
     }
-    bw
+    bw as usize
 }
 
 #[cfg(test)]
