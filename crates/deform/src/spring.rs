@@ -348,7 +348,8 @@ fn build_system(cls: &Classified, adj: &Adjacency) -> System {
 struct Springs<'a> {
     x: &'a [[f64; 3]],
     kind: Stiffness,
-    /// 2^e ≈ 1 / (diagonal of the grid's bounding box)^p, p the power of the length in K.
+    /// 2^e ≈ 1 / (diagonal of the baseline grid's bounding box)^p, p the power of the length
+    /// in K.
     scale: f64,
     /// For [`Stiffness::Volume`]: V̄ / V_node per node; for [`Stiffness::WallDistance`]:
     /// the distance d_node to the moving boundary.
@@ -551,29 +552,9 @@ fn springs<'a>(
             })
             .collect();
     }
-    // A power of two near 1 / diag^p (exact scaling; K is ~1 / length^p).
-    let (lo, hi) = x
-        .par_iter()
-        .with_min_len(CHUNK)
-        .fold(
-            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-            |(mut lo, mut hi), p| {
-                for k in 0..3 {
-                    lo[k] = lo[k].min(p[k]);
-                    hi[k] = hi[k].max(p[k]);
-                }
-                (lo, hi)
-            },
-        )
-        .reduce(
-            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-            |(a, b), (c, d)| {
-                (
-                    std::array::from_fn(|k| a[k].min(c[k])),
-                    std::array::from_fn(|k| b[k].max(d[k])),
-                )
-            },
-        );
+    // A power of two near 1 / diag^p (exact scaling; K is ~1 / length^p): the baseline
+    // grid's size serves every state (any power of two would give the same solution).
+    let (lo, hi) = mesh.bbox();
     let diag = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
     let power = if kind == Stiffness::InverseLength {
         1
@@ -626,20 +607,15 @@ fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> Result<SymMatrix<f32
     let mut diag = vec![0.0; nu];
     let mut cols = vec![0u32; total];
     let mut vals = vec![0.0f32; total];
-    // One (rows, diagonal, columns, values) piece per chunk of rows.
-    let mut pieces = Vec::with_capacity(nu.div_ceil(CHUNK));
-    {
-        let (mut dr, mut cr, mut vr) = (&mut diag[..], &mut cols[..], &mut vals[..]);
-        for lo in (0..nu).step_by(CHUNK) {
-            let hi = (lo + CHUNK).min(nu);
-            let len = offsets[hi] - offsets[lo];
-            let (d, dt) = dr.split_at_mut(hi - lo);
-            let (c, ct) = cr.split_at_mut(len);
-            let (v, vt) = vr.split_at_mut(len);
-            pieces.push((lo, d, c, v));
-            (dr, cr, vr) = (dt, ct, vt);
-        }
-    }
+    // One (first row, diagonal, columns, values) piece per chunk of rows.
+    let start = |r: usize| offsets[r];
+    let pieces: Vec<_> = row_chunks(&mut diag, nu, |r| r)
+        .into_iter()
+        .zip(row_chunks(&mut cols, nu, start))
+        .zip(row_chunks(&mut vals, nu, start))
+        .enumerate()
+        .map(|(k, ((d, c), v))| (k * CHUNK, d, c, v))
+        .collect();
     // The first bad spring of each piece (pieces in row order: the first of them all).
     let bad = pieces.into_par_iter().find_map_first(|(lo, d, c, v)| {
         let base = offsets[lo];
@@ -684,6 +660,21 @@ fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> Result<SymMatrix<f32
         cols,
         vals,
     })
+}
+
+/// `data` cut into one slice per chunk of [`CHUNK`] rows (of `rows`), rows r of which start
+/// at `start(r)` in `data` (`start(rows)` is its end): each chunk of a CSR array can then be
+/// written by its own task.
+fn row_chunks<T>(data: &mut [T], rows: usize, start: impl Fn(usize) -> usize) -> Vec<&mut [T]> {
+    let mut out = Vec::with_capacity(rows.div_ceil(CHUNK));
+    let mut rest = data;
+    for lo in (0..rows).step_by(CHUNK) {
+        let hi = (lo + CHUNK).min(rows);
+        let (piece, tail) = rest.split_at_mut(start(hi) - start(lo));
+        out.push(piece);
+        rest = tail;
+    }
+    out
 }
 
 /// b_k = `extra(k, i)` + Σ_{j prescribed} K_ij v(j) for unknown k at node i, for a per-node
@@ -1399,16 +1390,9 @@ fn permuted_adjacency(adj: &Adjacency, perm: &[u32]) -> Adjacency {
         offsets.push(total);
     }
     let mut indices = vec![0u32; total];
-    // Rows in chunks of CHUNK, each chunk writing its own slice.
-    let mut pieces = Vec::with_capacity(n.div_ceil(CHUNK));
-    let mut rest = &mut indices[..];
-    for lo in (0..n).step_by(CHUNK) {
-        let hi = (lo + CHUNK).min(n);
-        let (piece, tail) = rest.split_at_mut(offsets[hi] - offsets[lo]);
-        pieces.push((lo, hi, piece));
-        rest = tail;
-    }
-    pieces.into_par_iter().for_each(|(lo, hi, piece)| {
+    let pieces = row_chunks(&mut indices, n, |r| offsets[r]);
+    pieces.into_par_iter().enumerate().for_each(|(k, piece)| {
+        let (lo, hi) = (k * CHUNK, ((k + 1) * CHUNK).min(n));
         let base = offsets[lo];
         for r in lo..hi {
             let row = &mut piece[offsets[r] - base..offsets[r + 1] - base];
