@@ -142,14 +142,15 @@ impl<'a, T: Entry> Amg<'a, T> {
         let mut levels = Vec::new();
         let mut coarse: Vec<SymMatrix> = Vec::new();
         loop {
-            let done = |n: usize| n <= opts.max_coarse || levels.len() + 1 >= opts.max_levels;
+            let n = coarse.last().map_or(a.n(), |c| c.n());
+            if n <= opts.max_coarse || levels.len() + 1 >= opts.max_levels {
+                break;
+            }
             let step = match coarse.last() {
-                None if done(a.n()) => None,
-                None => Some(coarsen(a, opts.strength, levels.len())),
-                Some(c) if done(c.n()) => None,
-                Some(c) => Some(coarsen(c, opts.strength, levels.len())),
+                None => coarsen(a, opts.strength, levels.len()),
+                Some(c) => coarsen(c, opts.strength, levels.len()),
             };
-            let Some(Some((level, ac))) = step else {
+            let Some((level, ac)) = step else {
                 break;
             };
             levels.push(level);
@@ -218,7 +219,7 @@ impl<'a, T: Entry> Amg<'a, T> {
     /// out ← cycle applied to `b` on level `l`, whose matrix is `a`; `x` is the level's
     /// iterate, `out` is scratch until the last sweep, `deeper` is the scratch of
     /// the coarser levels. Returns b · out (0 on the coarsest level).
-    fn vcycle<M: Entry>(
+    fn cycle<M: Entry>(
         &self,
         a: &SymMatrix<M>,
         l: usize,
@@ -257,12 +258,12 @@ impl<'a, T: Entry> Amg<'a, T> {
         restrict_residual(a, &lev.p, b, x, &mut next.b, &mut next.lanes);
         // coarse[l] is the matrix of level l + 1.
         let ac = &self.coarse[l];
-        self.vcycle(ac, l + 1, &next.b, &mut next.out, &mut next.x, rest);
+        self.cycle(ac, l + 1, &next.b, &mut next.out, &mut next.x, rest);
         if l + 1 < self.levels.len() {
             // More cycles on the coarse level: out += V(b − A out).
             for _ in 1..self.coarse_cycles {
                 ac.residual(&next.b, &next.out, &mut next.r);
-                self.vcycle(ac, l + 1, &next.r, &mut next.d, &mut next.x, rest);
+                self.cycle(ac, l + 1, &next.r, &mut next.d, &mut next.x, rest);
                 for (o, d) in next.out.iter_mut().zip(&next.d) {
                     for k in 0..3 {
                         o[k] += d[k];
@@ -299,7 +300,7 @@ impl<T: Entry> Preconditioner for Amg<'_, T> {
             return super::vecops::dot(r, z);
         }
         let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        self.vcycle(&*self.fine, 0, r, z, work, &mut guard)
+        self.cycle(&*self.fine, 0, r, z, work, &mut guard)
     }
     fn name(&self) -> &'static str {
         "amg"
@@ -337,9 +338,9 @@ fn coarsen<T: Entry>(
     let rho = gershgorin(cur);
     let omega = 4.0 / (3.0 * rho);
     let mut p = smoothed_prolongator(cur, &agg, nagg, omega);
-    // The transfer operators are stored in single precision; the coarse matrix is the
-    // Galerkin product of the rounded P, so the V-cycle stays a symmetric positive
-    // definite preconditioner (A itself and every vector stay f64).
+    // The prolongator is stored in single precision; the coarse matrix is the Galerkin
+    // product of the rounded P, so the cycle stays a symmetric positive definite
+    // preconditioner (every vector stays f64).
     for v in &mut p.vals {
         *v = f64::from(*v as f32);
     }
@@ -407,8 +408,9 @@ fn jacobi_sweep_into<M: Entry>(
     })
 }
 
-/// A multigrid transfer operator (P or R = Pᵀ) in CSR form with single-precision values
-/// (half the memory and traffic of f64; products are formed in f64).
+/// A multigrid prolongator P in CSR form with single-precision values (half the memory and
+/// traffic of f64; products are formed in f64). The restriction uses it too, by rows
+/// ([`restrict_residual`]).
 struct Transfer {
     offsets: Vec<usize>,
     cols: Vec<u32>,
