@@ -283,12 +283,7 @@ fn figures() {
         let spmv = spmv_gbs(&a);
         let t_spmv = spmv_bytes(&a) / spmv / 1e6;
         // The same matrix with f64 values, for comparison in the same run.
-        let a64 = SymMatrix {
-            diag: a.diag.clone(),
-            offsets: a.offsets.clone(),
-            cols: a.cols.clone(),
-            vals: a.vals.iter().map(|&v| f64::from(v)).collect(),
-        };
+        let a64 = a.to_entries::<f64>();
         let spmv64 = spmv_gbs(&a64);
         let t_spmv64 = spmv_bytes(&a64) / spmv64 / 1e6;
         drop(a64);

@@ -201,6 +201,16 @@ impl<T: Entry> SymMatrix<T> {
             + self.vals.len() * std::mem::size_of::<T>()
     }
 
+    /// The same matrix with its off-diagonal values stored as `U` (rounded to nearest).
+    pub fn to_entries<U: Entry>(&self) -> SymMatrix<U> {
+        SymMatrix {
+            diag: self.diag.clone(),
+            offsets: self.offsets.clone(),
+            cols: self.cols.clone(),
+            vals: self.vals.iter().map(|&v| U::of(v.get())).collect(),
+        }
+    }
+
     /// The off-diagonal entries of row `i`: their columns and values.
     #[inline]
     pub fn row(&self, i: usize) -> (&[u32], &[T]) {

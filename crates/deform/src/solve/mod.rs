@@ -119,18 +119,8 @@ mod tests {
 
     /// `a` with its values rounded to single precision, stored as f32 and as f64.
     fn rounded(a: &SymMatrix) -> (SymMatrix<f32>, SymMatrix) {
-        let a32 = SymMatrix {
-            diag: a.diag.clone(),
-            offsets: a.offsets.clone(),
-            cols: a.cols.clone(),
-            vals: a.vals.iter().map(|&v| v as f32).collect(),
-        };
-        let a64 = SymMatrix {
-            diag: a.diag.clone(),
-            offsets: a.offsets.clone(),
-            cols: a.cols.clone(),
-            vals: a32.vals.iter().map(|&v| f64::from(v)).collect(),
-        };
+        let a32 = a.to_entries::<f32>();
+        let a64 = a32.to_entries::<f64>();
         (a32, a64)
     }
 

@@ -6,6 +6,17 @@ use deform::{
 };
 use mesh::Mesh;
 
+/// Whether each node lies on a marker.
+fn on_marker(m: &Mesh) -> Vec<bool> {
+    let mut on = vec![false; m.n_nodes()];
+    for mk in &m.markers {
+        for v in mk.elements.node_set() {
+            on[v as usize] = true;
+        }
+    }
+    on
+}
+
 /// A box with a block, interior nodes jittered (so the initial grid is not in spring
 /// equilibrium and linear fields are not reproduced by the plain spring system).
 fn box_grid() -> Mesh {
@@ -16,12 +27,7 @@ fn box_grid() -> Mesh {
         [3, 0, 3],
         [5, 3, 6],
     );
-    let mut on_marker = vec![false; m.n_nodes()];
-    for mk in &m.markers {
-        for v in mk.elements.node_set() {
-            on_marker[v as usize] = true;
-        }
-    }
+    let on_marker = on_marker(&m);
     let mut s = 7u64;
     for (i, p) in m.coords.iter_mut().enumerate() {
         if on_marker[i] {
@@ -290,12 +296,7 @@ fn errors_name_the_entity() {
 fn coincident_nodes_are_refused_naming_the_spring() {
     // An interior node moved onto a neighbour: a spring of zero length (infinite stiffness).
     let mut m = box_grid();
-    let mut on_marker = vec![false; m.n_nodes()];
-    for mk in &m.markers {
-        for v in mk.elements.node_set() {
-            on_marker[v as usize] = true;
-        }
-    }
+    let on_marker = on_marker(&m);
     let adj = mesh::Adjacency::build(&m);
     let i = (0..m.n_nodes()).rev().find(|&i| !on_marker[i]).unwrap();
     let j = adj.neighbours(i)[0] as usize;
