@@ -79,6 +79,18 @@ fn node_ranges(n_nodes: usize) -> Vec<(usize, usize)> {
         .collect()
 }
 
+/// `data` cut into consecutive slices of the given lengths.
+fn split_by_lengths<T>(data: &mut [T], lens: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut out = Vec::new();
+    let mut rest = data;
+    for len in lens {
+        let (part, tail) = rest.split_at_mut(len);
+        out.push(part);
+        rest = tail;
+    }
+    out
+}
+
 /// Counting, prefix sum and fill; both passes run in parallel over node ranges, every range
 /// scanning the whole connectivity in element order (so each row lists its elements in
 /// increasing order).
@@ -97,50 +109,47 @@ fn incidence(n_nodes: usize, cells: &Elements) -> Incidence {
     }
     // counts[i + 1] = number of elements of node i.
     let mut counts = vec![0usize; n_nodes + 1];
-    let mut rest = &mut counts[1..];
-    let mut parts = Vec::with_capacity(ranges.len());
-    for &(lo, hi) in &ranges {
-        let (part, r) = rest.split_at_mut(hi - lo);
-        parts.push((lo, part));
-        rest = r;
-    }
-    parts.into_par_iter().for_each(|(lo, part)| {
-        for g in cells.groups() {
-            for &v in &g.nodes {
-                if let Some(c) = (v as usize).checked_sub(lo).and_then(|k| part.get_mut(k)) {
-                    *c += 1;
+    let parts = split_by_lengths(&mut counts[1..], ranges.iter().map(|&(lo, hi)| hi - lo));
+    parts
+        .into_par_iter()
+        .zip(&ranges)
+        .for_each(|(part, &(lo, _))| {
+            for g in cells.groups() {
+                for &v in &g.nodes {
+                    if let Some(c) = (v as usize).checked_sub(lo).and_then(|k| part.get_mut(k)) {
+                        *c += 1;
+                    }
                 }
             }
-        }
-    });
+        });
     for i in 0..n_nodes {
         counts[i + 1] += counts[i];
     }
     let offsets = counts;
     let mut slots = vec![0u32; offsets[n_nodes]];
-    let mut rest = &mut slots[..];
-    let mut parts = Vec::with_capacity(ranges.len());
-    for &(lo, hi) in &ranges {
-        let (part, r) = rest.split_at_mut(offsets[hi] - offsets[lo]);
-        parts.push((lo, hi, part));
-        rest = r;
-    }
-    parts.into_par_iter().for_each(|(lo, hi, part)| {
-        let base = offsets[lo];
-        let mut cursor: Vec<usize> = offsets[lo..hi].iter().map(|&o| o - base).collect();
-        for (g, &first) in cells.groups().iter().zip(&group_start) {
-            let nn = g.kind.n_nodes();
-            for (e, conn) in g.nodes.chunks_exact(nn).enumerate() {
-                let slot = (first + e as u32) << 3;
-                for (local, &v) in conn.iter().enumerate() {
-                    if let Some(c) = (v as usize).checked_sub(lo).and_then(|k| cursor.get_mut(k)) {
-                        part[*c] = slot | local as u32;
-                        *c += 1;
+    let lens = ranges.iter().map(|&(lo, hi)| offsets[hi] - offsets[lo]);
+    let parts = split_by_lengths(&mut slots, lens);
+    parts
+        .into_par_iter()
+        .zip(&ranges)
+        .for_each(|(part, &(lo, hi))| {
+            let base = offsets[lo];
+            let mut cursor: Vec<usize> = offsets[lo..hi].iter().map(|&o| o - base).collect();
+            for (g, &first) in cells.groups().iter().zip(&group_start) {
+                let nn = g.kind.n_nodes();
+                for (e, conn) in g.nodes.chunks_exact(nn).enumerate() {
+                    let slot = (first + e as u32) << 3;
+                    for (local, &v) in conn.iter().enumerate() {
+                        if let Some(c) =
+                            (v as usize).checked_sub(lo).and_then(|k| cursor.get_mut(k))
+                        {
+                            part[*c] = slot | local as u32;
+                            *c += 1;
+                        }
                     }
                 }
             }
-        }
-    });
+        });
     Incidence {
         offsets,
         slots,
