@@ -8,6 +8,9 @@
 //! "46,84" for ~50k and ~300k nodes; add 126 for ~1M nodes). The linear systems are solved
 //! with the unknowns in `deform`'s internal order; `DEFORM_BENCH_ORDERS` also prints the
 //! SpMV with the unknowns in other orders (generator, Morton, Morton + RCM).
+//! `DEFORM_AMG_CYCLES`, `DEFORM_AMG_STRENGTH` and `DEFORM_AMG_DAMPING=cS,cP` override the
+//! multigrid options of the solve figures; `DEFORM_BENCH_NO_JACOBI` skips the Jacobi-PCG
+//! solve and `DEFORM_BENCH_SOLVES_ONLY` the whole deformations.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -319,6 +322,17 @@ fn figures() {
             .ok()
             .and_then(|v| v.parse().ok())
             .unwrap_or(AmgOptions::default().strength);
+        // `DEFORM_AMG_DAMPING=cS,cP`: the smoother's and the prolongator's damping.
+        let damping = std::env::var("DEFORM_AMG_DAMPING")
+            .ok()
+            .and_then(|v| {
+                let (s, p) = v.split_once(',')?;
+                Some((s.parse().ok()?, p.parse().ok()?))
+            })
+            .unwrap_or((
+                AmgOptions::default().smoother_damping,
+                AmgOptions::default().prolongator_damping,
+            ));
         let amg = Amg::new(
             &a,
             &AmgOptions {
@@ -327,6 +341,8 @@ fn figures() {
                     .ok()
                     .and_then(|v| v.parse().ok())
                     .unwrap_or(AmgOptions::default().coarse_cycles),
+                smoother_damping: damping.0,
+                prolongator_damping: damping.1,
                 ..Default::default()
             },
         )

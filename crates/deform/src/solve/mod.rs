@@ -172,24 +172,63 @@ mod tests {
                 .collect()
         };
         let (u, v) = (vec_of(0.37), vec_of(1.91));
-        for cycles in [1, 2, 3] {
+        // The most oscillating vector: the one a too weakly damped smoother would amplify.
+        let w: Vec<V3> = (0..a.n())
+            .map(|i| {
+                if i % 2 == 0 {
+                    [1.0, -1.0, 0.5]
+                } else {
+                    [-1.0, 1.0, -0.5]
+                }
+            })
+            .collect();
+        // The default damping, and one at the edge of the allowed range (0, 2).
+        for (cycles, damping) in [(1, 1.8), (2, 1.8), (3, 1.8), (2, 1.99)] {
             let opts = AmgOptions {
                 max_coarse: 10,
                 coarse_cycles: cycles,
+                smoother_damping: damping,
                 ..Default::default()
             };
             let m = Amg::new(&a, &opts).unwrap();
             assert!(m.info().sizes.len() >= 3, "{:?}", m.info().sizes);
-            let (mut mu, mut mv) = (vec![[0.0; 3]; a.n()], vec![[0.0; 3]; a.n()]);
+            let (mut mu, mut mv, mut mw) = (
+                vec![[0.0; 3]; a.n()],
+                vec![[0.0; 3]; a.n()],
+                vec![[0.0; 3]; a.n()],
+            );
             m.apply(&u, &mut mu);
             m.apply(&v, &mut mv);
+            m.apply(&w, &mut mw);
             let (umv, vmu) = (vecops::dot(&u, &mv), vecops::dot(&v, &mu));
             let scale = vecops::norm(&u) * vecops::norm(&mv);
             assert!(
                 (umv - vmu).abs() <= 1e-12 * scale,
-                "{cycles}: {umv} vs {vmu}"
+                "{cycles}, {damping}: {umv} vs {vmu}"
             );
-            assert!(vecops::dot(&u, &mu) > 0.0 && vecops::dot(&v, &mv) > 0.0);
+            for (x, mx) in [(&u, &mu), (&v, &mv), (&w, &mw)] {
+                assert!(vecops::dot(x, mx) > 0.0, "{cycles}, {damping}");
+            }
+        }
+    }
+
+    #[test]
+    fn multigrid_damping_outside_its_range_is_refused() {
+        let (a, _) = grid_system(6, 5, 4);
+        for (s, p) in [
+            (2.0, 1.6),
+            (0.0, 1.6),
+            (f64::NAN, 1.6),
+            (1.8, -0.1),
+            (1.8, f64::INFINITY),
+        ] {
+            let opts = AmgOptions {
+                smoother_damping: s,
+                prolongator_damping: p,
+                ..Default::default()
+            };
+            let e = Amg::new(&a, &opts).err().expect("refused");
+            assert!(e.to_string().contains("damping"), "{e}");
         }
     }
 
