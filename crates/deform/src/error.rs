@@ -10,13 +10,13 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
-    /// A matrix that must be symmetric positive definite is not (non-positive pivot).
     /// A solver option outside its valid range.
     #[error("invalid solver option: {reason}")]
     BadOption {
         /// What is wrong.
         reason: String,
     },
+    /// A matrix that must be symmetric positive definite is not (non-positive pivot).
     #[error("matrix not positive definite: multigrid level {level}, pivot {index} = {pivot:e}")]
     NotPositiveDefinite {
         /// Multigrid level (0 = finest).
