@@ -669,8 +669,12 @@ impl Acc {
             self.val[ci] += v;
         }
     }
-    fn drain(&mut self, out_c: &mut Vec<u32>, out_v: &mut Vec<f64>) -> usize {
-        self.list.sort_unstable();
+    /// Appends the row's entries to `out_c` / `out_v`, sorted by column when `sorted`
+    /// (otherwise in first-touch order), and clears the accumulator.
+    fn drain(&mut self, out_c: &mut Vec<u32>, out_v: &mut Vec<f64>, sorted: bool) -> usize {
+        if sorted {
+            self.list.sort_unstable();
+        }
         let n = self.list.len();
         for &c in &self.list {
             out_c.push(c);
@@ -689,7 +693,8 @@ const GALERKIN_ROWS: usize = 4096;
 ///
 /// Row-parallel over blocks of [`GALERKIN_ROWS`] coarse rows; each block first computes the
 /// rows of A P it needs (the fine rows in its rows of R), then its rows of R (A P), both with
-/// a dense accumulator. A P is never held whole (it has ~2× the entries of A: the largest
+/// a dense accumulator (the rows of A P are left unsorted: only the rows of A_c need their
+/// columns in order). A P is never held whole (it has ~2× the entries of A: the largest
 /// temporary of the set-up otherwise); the fine rows shared by neighbouring blocks are
 /// computed once per block. Every row is computed by one task in a fixed order, so the
 /// result does not depend on the thread count (nor on the block size).
@@ -736,7 +741,7 @@ fn galerkin<T: Entry>(a: &SymMatrix<T>, p: &Csr, r: &Csr) -> SymMatrix {
                 for (k, &i) in need.iter().enumerate() {
                     loc[i as usize] = k as u32;
                     ap_row(i as usize, acc);
-                    acc.drain(&mut ap_c, &mut ap_v);
+                    acc.drain(&mut ap_c, &mut ap_v, false);
                     ap_off.push(ap_c.len());
                 }
                 // Rows lo..hi of R (A P).
@@ -750,7 +755,7 @@ fn galerkin<T: Entry>(a: &SymMatrix<T>, p: &Csr, r: &Csr) -> SymMatrix {
                             acc.add(ap_c[q], v * ap_v[q]);
                         }
                     }
-                    lens.push(acc.drain(&mut cols, &mut vals));
+                    lens.push(acc.drain(&mut cols, &mut vals, true));
                 }
                 for &i in need.iter() {
                     loc[i as usize] = u32::MAX;

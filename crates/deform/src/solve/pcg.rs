@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::csr::{Entry, SymMatrix};
-use super::vecops::{CHUNK, V3, axpy, chunked_sum, dot, norm, ordered_sum, xpby};
+use super::vecops::{CHUNK, V3, axpy, axpy_xpby, chunked_sum, dot, norm, ordered_sum};
 
 /// A linear constraint on one unknown's 3-vector.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -211,16 +211,17 @@ pub fn pcg<P: Preconditioner + ?Sized, T: Entry>(
             break;
         }
         let alpha = rz / pq;
-        axpy(alpha, &p, x);
         rr = update_residual(alpha, &q, &mut r);
-        if rr.sqrt() <= opts.rel_tol * scale {
+        if rr.sqrt() <= opts.rel_tol * scale || it == opts.max_iters {
+            axpy(alpha, &p, x);
             break;
         }
         let rz_new = m.apply_dot(&r, &mut z, &mut q);
         cons.project(&mut z);
         let beta = rz_new / rz;
         rz = rz_new;
-        xpby(&z, beta, &mut p);
+        // x += α p and the next direction in one pass over p.
+        axpy_xpby(alpha, x, &z, beta, &mut p);
     }
     // True residual (in z's storage: not needed any more).
     let rtrue = &mut z;

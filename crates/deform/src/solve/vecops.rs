@@ -92,6 +92,23 @@ pub fn xpby(z: &[V3], beta: f64, p: &mut [V3]) {
         });
 }
 
+/// x ← x + α p, then p ← z + β p, in one pass (conjugate gradients' two updates of the
+/// same p; bit for bit [`axpy`] followed by [`xpby`]).
+pub fn axpy_xpby(alpha: f64, x: &mut [V3], z: &[V3], beta: f64, p: &mut [V3]) {
+    assert!(x.len() == p.len() && z.len() == p.len());
+    x.par_chunks_mut(CHUNK)
+        .zip(p.par_chunks_mut(CHUNK))
+        .zip(z.par_chunks(CHUNK))
+        .for_each(|((cx, cp), cz)| {
+            for ((xi, pi), zi) in cx.iter_mut().zip(cp.iter_mut()).zip(cz) {
+                for k in 0..3 {
+                    xi[k] += alpha * pi[k];
+                    pi[k] = zi[k] + beta * pi[k];
+                }
+            }
+        });
+}
+
 /// Sets every entry to zero.
 pub fn fill_zero(a: &mut [V3]) {
     a.par_chunks_mut(CHUNK).for_each(|c| c.fill([0.0; 3]));
@@ -100,6 +117,27 @@ pub fn fill_zero(a: &mut [V3]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fused_cg_update_equals_the_two_updates_bit_for_bit() {
+        let n = 3 * CHUNK + 17;
+        let v = |s: f64| -> Vec<V3> {
+            (0..n)
+                .map(|i| {
+                    let t = s * (i as f64 + 0.5);
+                    [t.sin(), t.cos() * 3.0, (2.0 * t).sin() / 7.0]
+                })
+                .collect()
+        };
+        let (x0, p0, z) = (v(0.3), v(1.7), v(2.9));
+        let (alpha, beta) = (0.731, -1.37e-2);
+        let (mut x1, mut p1) = (x0.clone(), p0.clone());
+        axpy(alpha, &p1, &mut x1);
+        xpby(&z, beta, &mut p1);
+        let (mut x2, mut p2) = (x0, p0);
+        axpy_xpby(alpha, &mut x2, &z, beta, &mut p2);
+        assert_eq!((x1, p1), (x2, p2));
+    }
 
     #[test]
     fn dot_is_thread_count_independent() {
