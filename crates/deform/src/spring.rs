@@ -31,7 +31,7 @@ use crate::bc::{BoundaryConditions, Classified, NodeRole, PlaneInfo, classify};
 use crate::error::{Error, Result};
 use crate::rotation::{frame, rotation_from_frame};
 use crate::solve::order::inverse;
-use crate::solve::vecops::{CHUNK, V3, norm};
+use crate::solve::vecops::{CHUNK, V3, norm, row_chunks};
 use crate::solve::{
     Amg, AmgInfo, AmgOptions, Constraints, Csr, Jacobi, SolveOptions, SolveReport, SymMatrix, pcg,
     point_iteration,
@@ -609,10 +609,10 @@ fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> Result<SymMatrix<f32
     let mut vals = vec![0.0f32; total];
     // One (first row, diagonal, columns, values) piece per chunk of rows.
     let start = |r: usize| offsets[r];
-    let pieces: Vec<_> = row_chunks(&mut diag, nu, |r| r)
+    let pieces: Vec<_> = row_chunks(&mut diag, nu, CHUNK, |r| r)
         .into_iter()
-        .zip(row_chunks(&mut cols, nu, start))
-        .zip(row_chunks(&mut vals, nu, start))
+        .zip(row_chunks(&mut cols, nu, CHUNK, start))
+        .zip(row_chunks(&mut vals, nu, CHUNK, start))
         .enumerate()
         .map(|(k, ((d, c), v))| (k * CHUNK, d, c, v))
         .collect();
@@ -660,21 +660,6 @@ fn assemble(sys: &System, adj: &Adjacency, sp: &Springs) -> Result<SymMatrix<f32
         cols,
         vals,
     })
-}
-
-/// `data` cut into one slice per chunk of [`CHUNK`] rows (of `rows`), rows r of which start
-/// at `start(r)` in `data` (`start(rows)` is its end): each chunk of a CSR array can then be
-/// written by its own task.
-fn row_chunks<T>(data: &mut [T], rows: usize, start: impl Fn(usize) -> usize) -> Vec<&mut [T]> {
-    let mut out = Vec::with_capacity(rows.div_ceil(CHUNK));
-    let mut rest = data;
-    for lo in (0..rows).step_by(CHUNK) {
-        let hi = (lo + CHUNK).min(rows);
-        let (piece, tail) = rest.split_at_mut(start(hi) - start(lo));
-        out.push(piece);
-        rest = tail;
-    }
-    out
 }
 
 /// b_k = `extra(k, i)` + Σ_{j prescribed} K_ij v(j) for unknown k at node i, for a per-node
@@ -1390,7 +1375,7 @@ fn permuted_adjacency(adj: &Adjacency, perm: &[u32]) -> Adjacency {
         offsets.push(total);
     }
     let mut indices = vec![0u32; total];
-    let pieces = row_chunks(&mut indices, n, |r| offsets[r]);
+    let pieces = row_chunks(&mut indices, n, CHUNK, |r| offsets[r]);
     pieces.into_par_iter().enumerate().for_each(|(k, piece)| {
         let (lo, hi) = (k * CHUNK, ((k + 1) * CHUNK).min(n));
         let base = offsets[lo];

@@ -33,6 +33,26 @@ where
     ordered_sum(parts)
 }
 
+/// `data` cut into one slice per chunk of `chunk` rows (of `rows`), rows r of which start
+/// at `start(r)` in `data` (`start(rows)` is its end): each chunk of a CSR array can then be
+/// written by its own task.
+pub(crate) fn row_chunks<T>(
+    data: &mut [T],
+    rows: usize,
+    chunk: usize,
+    start: impl Fn(usize) -> usize,
+) -> Vec<&mut [T]> {
+    let mut out = Vec::with_capacity(rows.div_ceil(chunk));
+    let mut rest = data;
+    for lo in (0..rows).step_by(chunk.max(1)) {
+        let hi = (lo + chunk).min(rows);
+        let (piece, tail) = rest.split_at_mut(start(hi) - start(lo));
+        out.push(piece);
+        rest = tail;
+    }
+    out
+}
+
 /// Σ_i a_i · b_i over all nodes and components.
 pub fn dot(a: &[V3], b: &[V3]) -> f64 {
     assert_eq!(a.len(), b.len());
