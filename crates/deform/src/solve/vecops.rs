@@ -42,9 +42,10 @@ pub(crate) fn row_chunks<T>(
     chunk: usize,
     start: impl Fn(usize) -> usize,
 ) -> Vec<&mut [T]> {
+    let chunk = chunk.max(1);
     let mut out = Vec::with_capacity(rows.div_ceil(chunk));
     let mut rest = data;
-    for lo in (0..rows).step_by(chunk.max(1)) {
+    for lo in (0..rows).step_by(chunk) {
         let hi = (lo + chunk).min(rows);
         let (piece, tail) = rest.split_at_mut(start(hi) - start(lo));
         out.push(piece);
