@@ -865,6 +865,48 @@ mod tests {
     use super::*;
 
     #[test]
+    fn galerkin_product_equals_the_dense_product() {
+        let (a, _) = crate::solve::tests::grid_system(9, 8, 7);
+        let (agg, nagg) = aggregate(&a, 0.0);
+        let p = smoothed_prolongator(&a, &agg, nagg, 1.6 / gershgorin(&a));
+        let ac = galerkin(&a, &p, &p.transpose());
+        ac.validate(1e-12).unwrap();
+        // Dense Pᵀ A P.
+        let ad = a.to_dense();
+        let n = a.n();
+        let mut pd = vec![vec![0.0; nagg]; n];
+        for (i, row) in pd.iter_mut().enumerate() {
+            let (cs, vs) = p.row(i);
+            for (&c, &v) in cs.iter().zip(vs) {
+                row[c as usize] = v;
+            }
+        }
+        let ap: Vec<Vec<f64>> = (0..n)
+            .map(|i| {
+                (0..nagg)
+                    .map(|c| (0..n).map(|k| ad[i][k] * pd[k][c]).sum())
+                    .collect()
+            })
+            .collect();
+        let acd = ac.to_dense();
+        let scale = ac.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+        for c in 0..nagg {
+            for e in 0..nagg {
+                let want: f64 = (0..n).map(|i| pd[i][c] * ap[i][e]).sum();
+                assert!(
+                    (acd[c][e] - want).abs() <= 1e-12 * scale,
+                    "({c}, {e}): {} vs {want}",
+                    acd[c][e]
+                );
+            }
+        }
+        // Rows sorted by column, as in every matrix of the hierarchy.
+        for i in 0..nagg {
+            assert!(ac.row(i).0.windows(2).all(|w| w[0] < w[1]), "row {i}");
+        }
+    }
+
+    #[test]
     fn prolongator_rows_equal_sorted_merge_bit_for_bit() {
         for (a, _) in [
             crate::solve::tests::grid_system(12, 11, 10),
