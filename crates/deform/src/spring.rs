@@ -1580,16 +1580,9 @@ impl<'s> Deformer<'s> {
             (None, Vec::new())
         };
         tt = Instant::now();
-        if m2.cells.len() > mesh::adjacency::MAX_ELEMENTS {
-            return Err(Error::BadGraph {
-                reason: format!(
-                    "{} cells: at most {} are supported",
-                    m2.cells.len(),
-                    mesh::adjacency::MAX_ELEMENTS
-                ),
-            });
-        }
-        let mut adj = Adjacency::build(&m2);
+        let mut adj = Adjacency::try_build(&m2).map_err(|e| Error::BadGraph {
+            reason: e.to_string(),
+        })?;
         tr("adjacency", &mut tt);
         // The wall distance of the set-up's springs, when computed beside the level order.
         let mut distance = None;

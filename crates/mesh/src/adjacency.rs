@@ -12,6 +12,7 @@
 
 use rayon::prelude::*;
 
+use crate::error::{Error, Result};
 use crate::grid::{ElementKind, Elements, Mesh};
 
 /// Symmetric node adjacency: the neighbours of node `i` are
@@ -66,6 +67,17 @@ impl Incidence {
 /// number and the local node share a `u32` of the incidence table): 2^29, 536 M (a grid of
 /// that size would hold 8.6 GB of tetrahedron connectivity).
 pub const MAX_ELEMENTS: usize = 1 << 29;
+
+/// Refuses more than [`MAX_ELEMENTS`] cells (the check of [`Mesh::validate`] and
+/// [`Adjacency::try_build`]).
+pub(crate) fn check_element_count(n: usize) -> Result<()> {
+    if n > MAX_ELEMENTS {
+        return Err(Error::Invalid {
+            what: format!("{n} cells: at most {MAX_ELEMENTS} are supported"),
+        });
+    }
+    Ok(())
+}
 
 /// Node ranges of the parallel incidence passes: one per thread (each pass scans all the
 /// connectivity and handles the nodes of its range, so the result does not depend on the
@@ -219,6 +231,13 @@ impl Adjacency {
     /// ```
     pub fn build(mesh: &Mesh) -> Self {
         Self::from_elements(mesh.n_nodes(), &mesh.cells)
+    }
+
+    /// [`Adjacency::build`], refusing a grid of more than [`MAX_ELEMENTS`] cells with
+    /// [`Error::Invalid`] instead of panicking.
+    pub fn try_build(mesh: &Mesh) -> Result<Self> {
+        check_element_count(mesh.cells.len())?;
+        Ok(Self::build(mesh))
     }
 
     /// Builds the adjacency of any element set over `n_nodes` nodes.

@@ -432,13 +432,7 @@ impl Mesh {
         if self.dim != 2 && self.dim != 3 {
             return bad(format!("dimension {} (expected 2 or 3)", self.dim));
         }
-        if self.cells.len() > crate::adjacency::MAX_ELEMENTS {
-            return bad(format!(
-                "{} cells: at most {} are supported",
-                self.cells.len(),
-                crate::adjacency::MAX_ELEMENTS
-            ));
-        }
+        crate::adjacency::check_element_count(self.cells.len())?;
         let n = self.coords.len();
         if let Some((i, _)) = self
             .coords
