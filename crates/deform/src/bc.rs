@@ -224,8 +224,7 @@ pub(crate) fn classify(
     supports: Option<&Supports>,
 ) -> Result<Classified> {
     let n = mesh.n_nodes();
-    let (lo, hi) = mesh.bbox();
-    let diag = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
+    let diag = mesh.bbox_diagonal();
     let mut role_of_marker: Vec<Option<MarkerRole>> = vec![None; mesh.markers.len()];
     for (name, role) in &bc.markers {
         let Some(k) = mesh.markers.iter().position(|m| &m.name == name) else {

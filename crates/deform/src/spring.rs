@@ -554,8 +554,7 @@ fn springs<'a>(
     }
     // A power of two near 1 / diag^p (exact scaling; K is ~1 / length^p): the baseline
     // grid's size serves every state (any power of two would give the same solution).
-    let (lo, hi) = mesh.bbox();
-    let diag = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt();
+    let diag = mesh.bbox_diagonal();
     let power = if kind == Stiffness::InverseLength {
         1
     } else {
@@ -1153,10 +1152,7 @@ fn step(
         // on its support nearest to its tentative position (parameters by Eq. 31 / 28),
         // re-linearise the constraints there and solve for the correction, until the largest
         // node update is ≤ slide_rel_tol × the largest boundary displacement.
-        let scale = {
-            let (lo, hi) = mesh.bbox();
-            ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
-        };
+        let scale = mesh.bbox_diagonal();
         let bnorm = norm(&b);
         let mut base = dx0;
         let mut converged = false;

@@ -423,6 +423,12 @@ impl Mesh {
         (lo, hi)
     }
 
+    /// Length of the diagonal of [`Mesh::bbox`] (the grid's size, for relative tolerances).
+    pub fn bbox_diagonal(&self) -> f64 {
+        let (lo, hi) = self.bbox();
+        ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
+    }
+
     /// Checks the invariants: dimension 2 or 3, at most [`crate::adjacency::MAX_ELEMENTS`]
     /// cells, node indices in range, cells of dimension
     /// `dim`, marker elements of dimension `dim - 1`, entity arrays empty or one per
