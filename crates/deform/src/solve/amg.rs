@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use super::csr::{Csr, Entry, SymMatrix};
 use super::pcg::Preconditioner;
-use super::vecops::{CHUNK, V3, chunked_sum};
+use super::vecops::{CHUNK, V3, axpy, chunked_sum};
 use crate::error::{Error, Result};
 
 /// Multigrid setup options.
@@ -296,11 +296,7 @@ impl<'a, T: Entry> Amg<'a, T> {
             for _ in 1..self.coarse_cycles {
                 ac.residual(&next.b, &next.out, &mut next.r);
                 self.cycle(ac, l + 1, &next.r, &mut next.d, &mut next.x, rest);
-                for (o, d) in next.out.iter_mut().zip(&next.d) {
-                    for k in 0..3 {
-                        o[k] += d[k];
-                    }
-                }
+                axpy(1.0, &next.d, &mut next.out);
             }
         }
         // Prolongate and correct; post-smoothing, the last sweep written straight to `out`.
