@@ -189,28 +189,37 @@ fn node_orders(m: &Mesh, a: &SymMatrix<f32>) {
     };
     let ident: Vec<u32> = (0..m.n_nodes() as u32).collect();
     report("generator", &ident, 0.0);
-    let t = Instant::now();
-    let morton = deform::spring::spatial_order(&m.coords);
-    let t_morton = t.elapsed().as_secs_f64();
+    let (morton, adj, t_morton) = morton_order(m);
     report("morton", &morton, t_morton);
-    let mut mm = m.clone();
-    mm.renumber_nodes(&morton).unwrap();
-    let adj = mesh::Adjacency::build(&mm);
     let t = Instant::now();
     let level = deform::spring::level_order(&adj);
     let t_level = t.elapsed().as_secs_f64();
-    let composed: Vec<u32> = morton.iter().map(|&p| level[p as usize]).collect();
     report(
         "morton + level order (deform's)",
-        &composed,
+        &then(&morton, &level),
         t_morton + t_level,
     );
     let t = Instant::now();
     let rcm = mesh::order::reverse_cuthill_mckee(adj.n_nodes(), |i| adj.neighbours(i));
     let t_rcm = t.elapsed().as_secs_f64();
     let inv = deform::solve::order::inverse(&rcm);
-    let composed: Vec<u32> = morton.iter().map(|&p| inv[p as usize]).collect();
-    report("morton + RCM", &composed, t_morton + t_rcm);
+    report("morton + RCM", &then(&morton, &inv), t_morton + t_rcm);
+}
+
+/// The Morton order of `m`'s nodes (node i → `perm[i]`), the adjacency of the grid so
+/// renumbered, and the seconds the order took.
+fn morton_order(m: &Mesh) -> (Vec<u32>, mesh::Adjacency, f64) {
+    let t = Instant::now();
+    let morton = deform::spring::spatial_order(&m.coords);
+    let secs = t.elapsed().as_secs_f64();
+    let mut mm = m.clone();
+    mm.renumber_nodes(&morton).unwrap();
+    (morton, mesh::Adjacency::build(&mm), secs)
+}
+
+/// Node numbering `first`, then `second` applied to its result.
+fn then(first: &[u32], second: &[u32]) -> Vec<u32> {
+    first.iter().map(|&p| second[p as usize]).collect()
 }
 
 /// The unknowns of [`system`] (the nodes off the wing and far-field markers, in node order)
@@ -233,14 +242,18 @@ fn unknowns_by(m: &Mesh, node_perm: &[u32]) -> Vec<u32> {
 
 /// The system in `deform`'s internal order (Morton curve, then `level_order`).
 fn in_deform_order(m: &Mesh, a: &SymMatrix<f32>, b: &[V3]) -> (SymMatrix<f32>, Vec<V3>) {
-    let morton = deform::spring::spatial_order(&m.coords);
-    let mut mm = m.clone();
-    mm.renumber_nodes(&morton).unwrap();
-    let level = deform::spring::level_order(&mesh::Adjacency::build(&mm));
-    let composed: Vec<u32> = morton.iter().map(|&p| level[p as usize]).collect();
-    let order = unknowns_by(m, &composed);
+    let (morton, adj, _) = morton_order(m);
+    let order = unknowns_by(m, &then(&morton, &deform::spring::level_order(&adj)));
     let bp = order.iter().map(|&o| b[o as usize]).collect();
     (a.permuted(&order), bp)
+}
+
+/// The environment variable `name` parsed, or `default` when unset or unparsable.
+fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
 }
 
 /// `DEFORM_BENCH_STIFFNESS` = `l`, `l2` (default) or `volume`.
@@ -318,10 +331,7 @@ fn figures() {
         }
         let t = Instant::now();
         let c0 = cpu_s();
-        let strength = std::env::var("DEFORM_AMG_STRENGTH")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(AmgOptions::default().strength);
+        let defaults = AmgOptions::default();
         // `DEFORM_AMG_DAMPING=cS,cP`: the smoother's and the prolongator's damping.
         let damping = std::env::var("DEFORM_AMG_DAMPING")
             .ok()
@@ -329,18 +339,12 @@ fn figures() {
                 let (s, p) = v.split_once(',')?;
                 Some((s.parse().ok()?, p.parse().ok()?))
             })
-            .unwrap_or((
-                AmgOptions::default().smoother_damping,
-                AmgOptions::default().prolongator_damping,
-            ));
+            .unwrap_or((defaults.smoother_damping, defaults.prolongator_damping));
         let amg = Amg::new(
             &a,
             &AmgOptions {
-                strength,
-                coarse_cycles: std::env::var("DEFORM_AMG_CYCLES")
-                    .ok()
-                    .and_then(|v| v.parse().ok())
-                    .unwrap_or(AmgOptions::default().coarse_cycles),
+                strength: env_or("DEFORM_AMG_STRENGTH", defaults.strength),
+                coarse_cycles: env_or("DEFORM_AMG_CYCLES", defaults.coarse_cycles),
                 smoother_damping: damping.0,
                 prolongator_damping: damping.1,
                 ..Default::default()
