@@ -58,16 +58,33 @@ fn peak_rss_mb() -> f64 {
         .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
-/// STREAM triad a = b + s c over 3-vectors; returns GB/s (24 bytes per scalar element moved).
-fn triad_gbs(len: usize) -> f64 {
-    let b: Vec<V3> = (0..len).map(|i| [i as f64, 1.0, 2.0]).collect();
-    let c: Vec<V3> = (0..len).map(|i| [1.0, i as f64, 3.0]).collect();
-    let mut a: Vec<V3> = vec![[0.0; 3]; len];
-    let mut best = f64::INFINITY;
-    for _ in 0..10 {
+/// The arrays of a STREAM triad a = b + s c over `len` 3-vectors.
+struct Triad {
+    a: Vec<V3>,
+    b: Vec<V3>,
+    c: Vec<V3>,
+}
+
+impl Triad {
+    fn new(len: usize) -> Self {
+        Self {
+            a: vec![[0.0; 3]; len],
+            b: (0..len).map(|i| [i as f64, 1.0, 2.0]).collect(),
+            c: (0..len).map(|i| [1.0, i as f64, 3.0]).collect(),
+        }
+    }
+
+    /// Bytes one pass moves (24 per 3-vector of each array, STREAM's count).
+    fn bytes(&self) -> f64 {
+        (self.a.len() * 3 * 24) as f64
+    }
+
+    /// Seconds of one pass.
+    fn pass(&mut self) -> f64 {
         let t = Instant::now();
-        a.par_chunks_mut(4096)
-            .zip(b.par_chunks(4096).zip(c.par_chunks(4096)))
+        self.a
+            .par_chunks_mut(4096)
+            .zip(self.b.par_chunks(4096).zip(self.c.par_chunks(4096)))
             .for_each(|(ca, (cb, cc))| {
                 for ((x, y), z) in ca.iter_mut().zip(cb).zip(cc) {
                     for k in 0..3 {
@@ -75,10 +92,38 @@ fn triad_gbs(len: usize) -> f64 {
                     }
                 }
             });
-        best = best.min(t.elapsed().as_secs_f64());
-        black_box(&a);
+        let s = t.elapsed().as_secs_f64();
+        black_box(&self.a);
+        s
     }
-    (len * 3 * 8 * 3) as f64 / best / 1e9
+}
+
+/// STREAM triad over `len` 3-vectors; returns GB/s (best of 10 passes).
+fn triad_gbs(len: usize) -> f64 {
+    let mut t = Triad::new(len);
+    let best = (0..10).map(|_| t.pass()).fold(f64::INFINITY, f64::min);
+    t.bytes() / best / 1e9
+}
+
+/// The SpMV's bandwidth as a fraction of the triad's, from `pairs` alternated passes (one
+/// triad pass, then one product): the ratio of each pair, sorted. Both passes of a pair see
+/// the machine in the same state, so the ratios are steadier than the ratio of two bests
+/// measured apart on a machine whose bandwidth drifts.
+fn paired_ratios<T: Entry>(a: &SymMatrix<T>, triad: &mut Triad, pairs: usize) -> Vec<f64> {
+    let x: Vec<V3> = (0..a.n()).map(|i| [i as f64, 1.0, -1.0]).collect();
+    let mut y = vec![[0.0; 3]; a.n()];
+    let mut ratios: Vec<f64> = (0..pairs)
+        .map(|_| {
+            let tt = triad.pass();
+            let t = Instant::now();
+            a.mul(&x, &mut y);
+            let ts = t.elapsed().as_secs_f64();
+            black_box(&y);
+            (spmv_bytes(a) / ts) / (triad.bytes() / tt)
+        })
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    ratios
 }
 
 /// Bytes one SpMV moves at least: matrix (values, columns, offsets, diagonal), x once, y.
@@ -308,6 +353,15 @@ fn figures() {
             100.0 * spmv / triad,
             100.0 * spmv64 / triad,
             a.nnz_offdiag() as f64 / a.n() as f64
+        );
+        let ratios = paired_ratios(&a, &mut Triad::new(4_000_000), 21);
+        println!(
+            "SpMV / triad in 21 alternated pairs: median {:.0} %, quartiles {:.0}–{:.0} %, range {:.0}–{:.0} %",
+            100.0 * ratios[10],
+            100.0 * ratios[5],
+            100.0 * ratios[15],
+            100.0 * ratios[0],
+            100.0 * ratios[20]
         );
         let so = SolveOptions {
             rel_tol: 1e-8,

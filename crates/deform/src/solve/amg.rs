@@ -639,10 +639,13 @@ fn smoothed_prolongator<T: Entry>(a: &SymMatrix<T>, agg: &[u32], nagg: usize, om
     })
 }
 
-/// Dense accumulator for sparse row products (per task scratch).
+/// Dense accumulator for sparse row products (per task scratch). An entry belongs to the
+/// current row when its mark equals the row's stamp, so starting a row costs nothing: no
+/// flag is cleared entry by entry.
 struct Acc {
     val: Vec<f64>,
-    used: Vec<bool>,
+    mark: Vec<u32>,
+    stamp: u32,
     list: Vec<u32>,
 }
 
@@ -650,15 +653,16 @@ impl Acc {
     fn new(n: usize) -> Self {
         Self {
             val: vec![0.0; n],
-            used: vec![false; n],
+            mark: vec![u32::MAX; n],
+            stamp: 0,
             list: Vec::new(),
         }
     }
     #[inline]
     fn add(&mut self, c: u32, v: f64) {
         let ci = c as usize;
-        if !self.used[ci] {
-            self.used[ci] = true;
+        if self.mark[ci] != self.stamp {
+            self.mark[ci] = self.stamp;
             self.val[ci] = v;
             self.list.push(c);
         } else {
@@ -666,20 +670,36 @@ impl Acc {
         }
     }
     /// Appends the row's entries to `out_c` / `out_v`, sorted by column when `sorted`
-    /// (otherwise in first-touch order), and clears the accumulator.
+    /// (otherwise in first-touch order), and starts the next row.
     fn drain(&mut self, out_c: &mut Vec<u32>, out_v: &mut Vec<f64>, sorted: bool) -> usize {
         if sorted {
             self.list.sort_unstable();
         }
+        out_c.extend_from_slice(&self.list);
+        out_v.extend(self.list.iter().map(|&c| self.val[c as usize]));
         let n = self.list.len();
-        for &c in &self.list {
-            out_c.push(c);
-            out_v.push(self.val[c as usize]);
-            self.used[c as usize] = false;
-        }
         self.list.clear();
+        self.stamp += 1;
+        if self.stamp == u32::MAX {
+            // Every stamp used (never on a real grid: one per row): clear the marks.
+            self.mark.fill(u32::MAX);
+            self.stamp = 0;
+        }
         n
     }
+}
+
+/// The scratch of one Galerkin task: the accumulator, the local index of the fine rows of
+/// A P the block needs (`u32::MAX` elsewhere), their list, and the block's rows of A P.
+/// Kept in a pool and reused from block to block: fresh buffers of this size cost more in
+/// page faults than the products written into them.
+struct GalerkinScratch {
+    acc: Acc,
+    loc: Vec<u32>,
+    need: Vec<u32>,
+    ap_off: Vec<usize>,
+    ap_c: Vec<u32>,
+    ap_v: Vec<f64>,
 }
 
 /// Coarse rows per task of the Galerkin product.
@@ -693,7 +713,8 @@ const GALERKIN_ROWS: usize = 4096;
 /// columns in order). A P is never held whole (it has ~2× the entries of A: the largest
 /// temporary of the set-up otherwise); the fine rows shared by neighbouring blocks are
 /// computed once per block. Every row is computed by one task in a fixed order, so the
-/// result does not depend on the thread count (nor on the block size).
+/// result does not depend on the thread count (nor on the block size, nor on which pooled
+/// scratch a block gets).
 fn galerkin<T: Entry>(a: &SymMatrix<T>, p: &Csr, r: &Csr) -> SymMatrix {
     let nc = p.ncols;
     let n = a.n();
@@ -710,55 +731,72 @@ fn galerkin<T: Entry>(a: &SymMatrix<T>, p: &Csr, r: &Csr) -> SymMatrix {
             }
         }
     };
+    let pool: Mutex<Vec<GalerkinScratch>> = Mutex::new(Vec::new());
     let blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..nc.div_ceil(GALERKIN_ROWS))
         .into_par_iter()
-        .map_init(
-            || (Acc::new(nc), vec![u32::MAX; n], Vec::<u32>::new()),
-            |(acc, loc, need), b| {
-                let lo = b * GALERKIN_ROWS;
-                let hi = (lo + GALERKIN_ROWS).min(nc);
-                // The fine rows of A P this block needs, and A P on them.
-                // Mark them, then collect them in increasing order over the marked range
-                // (no sort of the ~100 entries per coarse row).
-                const MARK: u32 = u32::MAX - 1;
-                let (mut first, mut last) = (usize::MAX, 0);
-                for &i in &r.cols[r.offsets[lo]..r.offsets[hi]] {
-                    loc[i as usize] = MARK;
-                    first = first.min(i as usize);
-                    last = last.max(i as usize);
-                }
-                need.clear();
-                if first <= last {
-                    need.extend((first..=last).filter(|&i| loc[i] == MARK).map(|i| i as u32));
-                }
-                let mut ap_off = Vec::with_capacity(need.len() + 1);
-                ap_off.push(0usize);
-                let (mut ap_c, mut ap_v) = (Vec::new(), Vec::new());
-                for (k, &i) in need.iter().enumerate() {
-                    loc[i as usize] = k as u32;
-                    ap_row(i as usize, acc);
-                    acc.drain(&mut ap_c, &mut ap_v, false);
-                    ap_off.push(ap_c.len());
-                }
-                // Rows lo..hi of R (A P).
-                let mut lens = Vec::with_capacity(hi - lo);
-                let (mut cols, mut vals) = (Vec::new(), Vec::new());
-                for i in lo..hi {
-                    for k in r.offsets[i]..r.offsets[i + 1] {
-                        let l = loc[r.cols[k] as usize] as usize;
-                        let v = r.vals[k];
-                        for q in ap_off[l]..ap_off[l + 1] {
-                            acc.add(ap_c[q], v * ap_v[q]);
-                        }
+        .map(|b| {
+            let taken = pool.lock().unwrap_or_else(|e| e.into_inner()).pop();
+            let mut st = taken.unwrap_or_else(|| GalerkinScratch {
+                acc: Acc::new(nc),
+                loc: vec![u32::MAX; n],
+                need: Vec::new(),
+                ap_off: Vec::new(),
+                ap_c: Vec::new(),
+                ap_v: Vec::new(),
+            });
+            let GalerkinScratch {
+                acc,
+                loc,
+                need,
+                ap_off,
+                ap_c,
+                ap_v,
+            } = &mut st;
+            let lo = b * GALERKIN_ROWS;
+            let hi = (lo + GALERKIN_ROWS).min(nc);
+            // The fine rows of A P this block needs, and A P on them.
+            // Mark them, then collect them in increasing order over the marked range
+            // (no sort of the ~100 entries per coarse row).
+            const MARK: u32 = u32::MAX - 1;
+            let (mut first, mut last) = (usize::MAX, 0);
+            for &i in &r.cols[r.offsets[lo]..r.offsets[hi]] {
+                loc[i as usize] = MARK;
+                first = first.min(i as usize);
+                last = last.max(i as usize);
+            }
+            need.clear();
+            if first <= last {
+                need.extend((first..=last).filter(|&i| loc[i] == MARK).map(|i| i as u32));
+            }
+            ap_off.clear();
+            ap_c.clear();
+            ap_v.clear();
+            ap_off.push(0usize);
+            for (k, &i) in need.iter().enumerate() {
+                loc[i as usize] = k as u32;
+                ap_row(i as usize, acc);
+                acc.drain(ap_c, ap_v, false);
+                ap_off.push(ap_c.len());
+            }
+            // Rows lo..hi of R (A P).
+            let mut lens = Vec::with_capacity(hi - lo);
+            let (mut cols, mut vals) = (Vec::new(), Vec::new());
+            for i in lo..hi {
+                for k in r.offsets[i]..r.offsets[i + 1] {
+                    let l = loc[r.cols[k] as usize] as usize;
+                    let v = r.vals[k];
+                    for q in ap_off[l]..ap_off[l + 1] {
+                        acc.add(ap_c[q], v * ap_v[q]);
                     }
-                    lens.push(acc.drain(&mut cols, &mut vals, true));
                 }
-                for &i in need.iter() {
-                    loc[i as usize] = u32::MAX;
-                }
-                (lens, cols, vals)
-            },
-        )
+                lens.push(acc.drain(&mut cols, &mut vals, true));
+            }
+            for &i in need.iter() {
+                loc[i as usize] = u32::MAX;
+            }
+            pool.lock().unwrap_or_else(|e| e.into_inner()).push(st);
+            (lens, cols, vals)
+        })
         .collect();
     let rap = Csr::from_blocks(nc, nc, blocks);
     // Split off the diagonal and symmetrise round-off: a_ij ← (a_ij + a_ji) / 2 is not
