@@ -14,6 +14,7 @@
 
 use rayon::prelude::*;
 
+use super::madd::{self, Kernel, MulAdd};
 use super::vecops::{CHUNK, V3, chunked_sum, row_chunks};
 use crate::error::{Error, Result};
 
@@ -218,9 +219,26 @@ impl<T: Entry> SymMatrix<T> {
         (&self.cols[r.clone()], &self.vals[r])
     }
 
-    /// One row's product (a_ii x_i + Σ_j a_ij x_j) for the three components.
-    #[inline]
+    /// One row's product (a_ii x_i + Σ_j a_ij x_j) for the three components, with the
+    /// multiply–adds of [`madd::run`] (bit for bit the row's value in [`SymMatrix::mul`]).
     pub(crate) fn row_mul(&self, i: usize, x: &[V3]) -> V3 {
+        struct Row<'a, T: Entry> {
+            a: &'a SymMatrix<T>,
+            i: usize,
+            x: &'a [V3],
+        }
+        impl<T: Entry> Kernel for Row<'_, T> {
+            type Output = V3;
+            #[inline(always)]
+            fn run<M: MulAdd>(self) -> V3 {
+                self.a.row_mul_with::<M>(self.i, self.x)
+            }
+        }
+        madd::run(Row { a: self, i, x })
+    }
+
+    #[inline(always)]
+    fn row_mul_with<M: MulAdd>(&self, i: usize, x: &[V3]) -> V3 {
         let d = self.diag[i];
         let xi = x[i];
         let mut s = [d * xi[0], d * xi[1], d * xi[2]];
@@ -228,20 +246,53 @@ impl<T: Entry> SymMatrix<T> {
         for (&c, &a) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
             let a = a.get();
             let xj = x[c as usize];
-            s[0] += a * xj[0];
-            s[1] += a * xj[1];
-            s[2] += a * xj[2];
+            s[0] = M::mul_add(a, xj[0], s[0]);
+            s[1] = M::mul_add(a, xj[1], s[1]);
+            s[2] = M::mul_add(a, xj[2], s[2]);
         }
         s
     }
 
-    /// Calls `f(i, (A x)_i)` for the rows `lo..hi` in increasing order.
+    /// Calls `f(i, (A x)_i)` for the rows `lo..hi` in increasing order, the whole loop
+    /// (`f` included) run by [`madd::run`].
     ///
     /// Rows are taken two at a time with their entries interleaved, so that the two rows'
     /// dependent chains of additions overlap in the processor; each row's own sum runs in the
     /// same order as [`SymMatrix::row_mul`], so the results are bit for bit those of row_mul.
     #[inline]
-    pub(crate) fn rows_mul<F: FnMut(usize, V3)>(&self, lo: usize, hi: usize, x: &[V3], mut f: F) {
+    pub(crate) fn rows_mul<F: FnMut(usize, V3)>(&self, lo: usize, hi: usize, x: &[V3], f: F) {
+        struct Rows<'a, T: Entry, F> {
+            a: &'a SymMatrix<T>,
+            lo: usize,
+            hi: usize,
+            x: &'a [V3],
+            f: F,
+        }
+        impl<T: Entry, F: FnMut(usize, V3)> Kernel for Rows<'_, T, F> {
+            type Output = ();
+            #[inline(always)]
+            fn run<M: MulAdd>(self) {
+                self.a
+                    .rows_mul_with::<M, F>(self.lo, self.hi, self.x, self.f)
+            }
+        }
+        madd::run(Rows {
+            a: self,
+            lo,
+            hi,
+            x,
+            f,
+        })
+    }
+
+    #[inline(always)]
+    fn rows_mul_with<M: MulAdd, F: FnMut(usize, V3)>(
+        &self,
+        lo: usize,
+        hi: usize,
+        x: &[V3],
+        mut f: F,
+    ) {
         let off = &self.offsets[lo..=hi];
         let mut i = lo;
         while i + 1 < hi {
@@ -263,33 +314,33 @@ impl<T: Entry> SymMatrix<T> {
                 let (va, vb) = (va.get(), vb.get());
                 let xa = x[ca as usize];
                 let xb = x[cb as usize];
-                s[0] += va * xa[0];
-                s[1] += va * xa[1];
-                s[2] += va * xa[2];
-                t[0] += vb * xb[0];
-                t[1] += vb * xb[1];
-                t[2] += vb * xb[2];
+                s[0] = M::mul_add(va, xa[0], s[0]);
+                s[1] = M::mul_add(va, xa[1], s[1]);
+                s[2] = M::mul_add(va, xa[2], s[2]);
+                t[0] = M::mul_add(vb, xb[0], t[0]);
+                t[1] = M::mul_add(vb, xb[1], t[1]);
+                t[2] = M::mul_add(vb, xb[2], t[2]);
             }
             for (&ca, &va) in c0[m..].iter().zip(&v0[m..]) {
                 let va = va.get();
                 let xa = x[ca as usize];
-                s[0] += va * xa[0];
-                s[1] += va * xa[1];
-                s[2] += va * xa[2];
+                s[0] = M::mul_add(va, xa[0], s[0]);
+                s[1] = M::mul_add(va, xa[1], s[1]);
+                s[2] = M::mul_add(va, xa[2], s[2]);
             }
             for (&cb, &vb) in c1[m..].iter().zip(&v1[m..]) {
                 let vb = vb.get();
                 let xb = x[cb as usize];
-                t[0] += vb * xb[0];
-                t[1] += vb * xb[1];
-                t[2] += vb * xb[2];
+                t[0] = M::mul_add(vb, xb[0], t[0]);
+                t[1] = M::mul_add(vb, xb[1], t[1]);
+                t[2] = M::mul_add(vb, xb[2], t[2]);
             }
             f(i, s);
             f(i + 1, t);
             i += 2;
         }
         if i < hi {
-            f(i, self.row_mul(i, x));
+            f(i, self.row_mul_with::<M>(i, x));
         }
     }
 

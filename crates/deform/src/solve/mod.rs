@@ -5,6 +5,7 @@
 
 pub mod amg;
 pub mod csr;
+pub mod madd;
 pub mod order;
 pub mod pcg;
 pub mod vecops;
@@ -308,6 +309,43 @@ mod tests {
         let mut y = vec![[0.0; 3]; a.n()];
         a.mul(&x, &mut y);
         assert!((0..a.n()).all(|i| y[i] == a.row_mul(i, &x)));
+    }
+
+    #[test]
+    fn products_round_as_the_processor_kind_says() {
+        // Each row written out with the multiply–add `madd::fused` reports: fused where the
+        // processor has FMA, a product then a sum elsewhere.
+        let (a, b) = grid_system(6, 7, 5);
+        let x: Vec<V3> = b
+            .iter()
+            .enumerate()
+            .map(|(i, v)| [v[0] / 3.0 + 0.1 * i as f64, (i as f64).cos(), v[2] - 0.7])
+            .collect();
+        let mut y = vec![[0.0; 3]; a.n()];
+        a.mul(&x, &mut y);
+        let row = |i: usize, fused: bool| {
+            let d = a.diag[i];
+            let mut s = [d * x[i][0], d * x[i][1], d * x[i][2]];
+            let (cols, vals) = a.row(i);
+            for (&c, &v) in cols.iter().zip(vals) {
+                for q in 0..3 {
+                    let xq = x[c as usize][q];
+                    s[q] = if fused {
+                        v.mul_add(xq, s[q])
+                    } else {
+                        s[q] + v * xq
+                    };
+                }
+            }
+            s
+        };
+        let fused = madd::fused();
+        let same = |s: V3, t: V3| (0..3).all(|q| s[q].to_bits() == t[q].to_bits());
+        for i in 0..a.n() {
+            assert!(same(row(i, fused), y[i]), "row {i}");
+        }
+        // The two roundings differ on these data, so the check above tells them apart.
+        assert!((0..a.n()).any(|i| !same(row(i, !fused), y[i])));
     }
 
     #[test]
