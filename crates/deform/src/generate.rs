@@ -151,7 +151,7 @@ pub fn grade_towards(mesh: &mut Mesh, lo: [f64; 3], hi: [f64; 3], ratio: f64) {
     }
 }
 
-/// The benchmark case of the deformation issue: the box [0,4]×[0,2]×[0,4] of `n × n/2 × n`
+/// The benchmark case of the deformation issue: the box `[0,4]×[0,2]×[0,4]` of `n × n/2 × n`
 /// cubes with the block x ∈ [1.5, 2.5], y ∈ [0, 1], z ≈ [1.88, 2.12] removed (the "wing",
 /// touching the symmetry plane y = 0). n = 30, 46, 84, 126 give ~15k, ~53k, ~310k, ~1.03M
 /// nodes. Boundary conditions: [`wing_pitch_conditions`].

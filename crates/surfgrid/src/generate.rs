@@ -484,9 +484,9 @@ fn mesh_component(
 /// oriented with respect to its component's inward normal. Write it with
 /// [`SurfaceGrid::to_mesh`] (one marker per surface component, named after it; MSH 4.1
 /// with parametric nodes, SU2 or VTU through `mesh`), move it with the model with
-/// [`crate::update`] (at frozen parameters, re-map where a junction moved), and tie a grid
+/// [`crate::update()`] (at frozen parameters, re-map where a junction moved), and tie a grid
 /// made elsewhere from it (e.g. the wall of a volume grid built on it) with
-/// [`crate::classify`].
+/// [`crate::classify()`].
 ///
 /// ```no_run
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {

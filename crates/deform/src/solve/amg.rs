@@ -423,15 +423,21 @@ fn jacobi_sweep_into<M: Entry>(
 ) -> f64 {
     chunked_sum(out, |r0, os| {
         let mut s = 0.0;
-        a.rows_mul(r0, r0 + os.len(), x, |i, v| {
-            let bi = b[i];
-            let ri = [bi[0] - v[0], bi[1] - v[1], bi[2] - v[2]];
-            let wk = w.at(i);
-            let xi = x[i];
-            let o = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
-            s += bi[0] * o[0] + bi[1] * o[1] + bi[2] * o[2];
-            os[i - r0] = o;
-        });
+        a.rows_mul(
+            r0,
+            r0 + os.len(),
+            x,
+            #[inline(always)]
+            |i, v| {
+                let bi = b[i];
+                let ri = [bi[0] - v[0], bi[1] - v[1], bi[2] - v[2]];
+                let wk = w.at(i);
+                let xi = x[i];
+                let o = [xi[0] + wk * ri[0], xi[1] + wk * ri[1], xi[2] + wk * ri[2]];
+                s += bi[0] * o[0] + bi[1] * o[1] + bi[2] * o[2];
+                os[i - r0] = o;
+            },
+        );
         s
     })
 }
@@ -489,17 +495,23 @@ fn restrict_residual<M: Entry>(
         if lo >= hi {
             return;
         }
-        a.rows_mul(lo, hi, x, |i, v| {
-            let r = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
-            let span = p.offsets[i]..p.offsets[i + 1];
-            for (&col, &w) in p.cols[span.clone()].iter().zip(&p.vals[span]) {
-                let w = f64::from(w);
-                let e = &mut acc[col as usize];
-                e[0] += w * r[0];
-                e[1] += w * r[1];
-                e[2] += w * r[2];
-            }
-        });
+        a.rows_mul(
+            lo,
+            hi,
+            x,
+            #[inline(always)]
+            |i, v| {
+                let r = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
+                let span = p.offsets[i]..p.offsets[i + 1];
+                for (&col, &w) in p.cols[span.clone()].iter().zip(&p.vals[span]) {
+                    let w = f64::from(w);
+                    let e = &mut acc[col as usize];
+                    e[0] += w * r[0];
+                    e[1] += w * r[1];
+                    e[2] += w * r[2];
+                }
+            },
+        );
     });
     let lanes = &*lanes;
     y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {

@@ -6,7 +6,7 @@
 //! deform bench: the product with A in ~12 % less time at 309k and 1M nodes) because the
 //! product's loop is bound by the number of instructions it issues, not by memory.
 //!
-//! The kernels that use it ([`Kernel`]) are compiled twice: once for the processor's
+//! The kernels that use it (`Kernel`) are compiled twice: once for the processor's
 //! features, run through [`pulp`]'s dispatch (which keeps every `unsafe` inside pulp), and
 //! once for the baseline. The results are then the same for any thread count, as
 //! everywhere in the solvers, and the same on every processor of one kind (with or without
@@ -69,7 +69,7 @@ pub(crate) fn run<K: Kernel>(k: K) -> K::Output {
     k.run::<Separate>()
 }
 
-/// True when [`run`] uses fused multiply–adds on this processor.
+/// True when the products (`run`) use fused multiply–adds on this processor.
 pub fn fused() -> bool {
     struct Probe;
     impl Kernel for Probe {

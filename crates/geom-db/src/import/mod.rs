@@ -6,7 +6,7 @@
 //!   128 by Bézier extraction per knot span ([`convert`](crate::convert)).
 //! * Approximations (100, 104, 118, 120, 122, rational 126/128, B-splines restricted to part
 //!   of their knot domain): interpolation at the control nodes of each arc (patch), split
-//!   until the sampled error is within the tolerance ([`approx`]).
+//!   until the sampled error is within the tolerance (module `approx`).
 //! * Faces: 144 trimmed surfaces (142 boundaries), 143 bounded surfaces (141 boundaries),
 //!   510 B-rep faces (508 loops over 504 edges), and untrimmed independent surfaces. Each face
 //!   becomes a surface component; each boundary curve piece an edge.
