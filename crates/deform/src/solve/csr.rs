@@ -256,8 +256,8 @@ impl<T: Entry> SymMatrix<T> {
     /// Calls `f(i, (A x)_i)` for the rows `lo..hi` in increasing order, the whole loop
     /// (`f` included) run by [`madd::run`]. Callers mark `f` `#[inline(always)]`: without
     /// it the compiler kept the restriction's and the smoother's per-row closures as a call
-    /// per row (multigrid solve at 1M, one process, alternated: median 1.232 → 1.169 s, 16
-    /// each).
+    /// per row (multigrid solve at 1M, one process, alternated: median 1.232 → 1.169 s in 16
+    /// pairs, 1.158 → 1.145 s in 8).
     ///
     /// Rows are taken two at a time with their entries interleaved, so that the two rows'
     /// dependent chains of additions overlap in the processor; each row's own sum runs in the
