@@ -911,6 +911,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn accumulator_restarts_its_stamps_when_they_run_out() {
+        // Rows across the wrap of the stamp; row k adds to column k, new in that row (the
+        // untouched marks hold u32::MAX, the stamp the counter would reach next).
+        let mut acc = Acc::new(4);
+        acc.stamp = u32::MAX - 2;
+        let (mut c, mut v) = (Vec::new(), Vec::new());
+        for k in 0..4u32 {
+            acc.add(k, 1.0);
+            acc.add(k, 0.5);
+            assert_eq!(acc.drain(&mut c, &mut v, true), 1, "row {k}");
+        }
+        assert_eq!(c, [0, 1, 2, 3]);
+        assert_eq!(v, [1.5; 4]);
+    }
+
+    #[test]
     fn galerkin_product_equals_the_dense_product() {
         let (a, _) = crate::solve::tests::grid_system(9, 8, 7);
         let (agg, nagg) = aggregate(&a, 0.0);
