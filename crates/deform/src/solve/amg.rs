@@ -259,6 +259,7 @@ impl<'a, T: Entry> Amg<'a, T> {
         out: &mut [V3],
         x: &mut [V3],
         deeper: &mut [Scratch],
+        prescaled: bool,
     ) -> f64 {
         if l == self.levels.len() {
             self.chol.solve(b, out);
@@ -269,17 +270,20 @@ impl<'a, T: Entry> Amg<'a, T> {
             omega: lev.omega,
             diag: &a.diag,
         };
-        // Pre-smoothing from x = 0: x = W b, then x += W (b − A x).
-        x.par_chunks_mut(CHUNK)
-            .zip(b.par_chunks(CHUNK))
-            .enumerate()
-            .for_each(|(c, (xs, bs))| {
-                let r0 = c * CHUNK;
-                for (k, (xi, bi)) in xs.iter_mut().zip(bs).enumerate() {
-                    let wk = w.at(r0 + k);
-                    *xi = [wk * bi[0], wk * bi[1], wk * bi[2]];
-                }
-            });
+        // Pre-smoothing from x = 0: x = W b (already in x when `prescaled`), then
+        // x += W (b − A x).
+        if !prescaled {
+            x.par_chunks_mut(CHUNK)
+                .zip(b.par_chunks(CHUNK))
+                .enumerate()
+                .for_each(|(c, (xs, bs))| {
+                    let r0 = c * CHUNK;
+                    for (k, (xi, bi)) in xs.iter_mut().zip(bs).enumerate() {
+                        let wk = w.at(r0 + k);
+                        *xi = [wk * bi[0], wk * bi[1], wk * bi[2]];
+                    }
+                });
+        }
         for _ in 1..self.sweeps {
             jacobi_sweep(a, w, b, x, out);
         }
@@ -290,12 +294,12 @@ impl<'a, T: Entry> Amg<'a, T> {
         restrict_residual(a, &lev.p, b, x, &mut next.b, &mut next.lanes);
         // coarse[l] is the matrix of level l + 1.
         let ac = &self.coarse[l];
-        self.cycle(ac, l + 1, &next.b, &mut next.out, &mut next.x, rest);
+        self.cycle(ac, l + 1, &next.b, &mut next.out, &mut next.x, rest, false);
         if l + 1 < self.levels.len() {
             // More cycles on the coarse level: out += V(b − A out).
             for _ in 1..self.coarse_cycles {
                 ac.residual(&next.b, &next.out, &mut next.r);
-                self.cycle(ac, l + 1, &next.r, &mut next.d, &mut next.x, rest);
+                self.cycle(ac, l + 1, &next.r, &mut next.d, &mut next.x, rest, false);
                 axpy(1.0, &next.d, &mut next.out);
             }
         }
@@ -328,7 +332,20 @@ impl<T: Entry> Preconditioner for Amg<'_, T> {
             return super::vecops::dot(r, z);
         }
         let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        self.cycle(&*self.fine, 0, r, z, work, &mut guard)
+        self.cycle(&*self.fine, 0, r, z, work, &mut guard, false)
+    }
+    /// The finest level's first smoothing pass, x = W r with W = ω D⁻¹.
+    fn first_pass(&self) -> Option<(f64, &[f64])> {
+        self.levels
+            .first()
+            .map(|lev| (lev.omega, &self.fine.diag[..]))
+    }
+    fn apply_dot_prescaled(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) -> f64 {
+        if self.levels.is_empty() {
+            return self.apply_dot(r, z, work);
+        }
+        let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        self.cycle(&*self.fine, 0, r, z, work, &mut guard, true)
     }
     fn name(&self) -> &'static str {
         "amg"

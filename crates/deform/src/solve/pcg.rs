@@ -79,6 +79,19 @@ pub trait Preconditioner: Sync {
         self.apply_with(r, z, work);
         dot(r, z)
     }
+    /// The weights of a first pass x = W r the preconditioner starts with, if it has one:
+    /// (ω, d) for W = ω diag(d)⁻¹, each weight formed as ω / d_i. PCG then forms W r in its
+    /// residual update, in `work`, and calls [`Preconditioner::apply_dot_prescaled`]: one
+    /// pass over r less per iteration.
+    fn first_pass(&self) -> Option<(f64, &[f64])> {
+        None
+    }
+    /// [`Preconditioner::apply_dot`] with `work` already holding W r (see
+    /// [`Preconditioner::first_pass`]); bit for bit the same result. The default ignores
+    /// `work`'s contents.
+    fn apply_dot_prescaled(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) -> f64 {
+        self.apply_dot(r, z, work)
+    }
     /// Short name for reports.
     fn name(&self) -> &'static str;
     /// Bytes held.
@@ -202,6 +215,7 @@ pub fn pcg<P: Preconditioner + ?Sized, T: Entry>(
     let mut rz = m.apply_dot(&r, &mut z, &mut q);
     cons.project(&mut z);
     let mut p = z.clone();
+    let first = m.first_pass();
     let mut it = 0;
     while it < opts.max_iters {
         it += 1;
@@ -211,12 +225,20 @@ pub fn pcg<P: Preconditioner + ?Sized, T: Entry>(
             break;
         }
         let alpha = rz / pq;
-        rr = update_residual(alpha, &q, &mut r);
+        // q is dead once r is updated: it receives the preconditioner's first pass W r.
+        rr = match first {
+            Some((omega, d)) => update_residual_scaled(alpha, &mut q, &mut r, omega, d),
+            None => update_residual(alpha, &q, &mut r),
+        };
         if rr.sqrt() <= opts.rel_tol * scale || it == opts.max_iters {
             axpy(alpha, &p, x);
             break;
         }
-        let rz_new = m.apply_dot(&r, &mut z, &mut q);
+        let rz_new = if first.is_some() {
+            m.apply_dot_prescaled(&r, &mut z, &mut q)
+        } else {
+            m.apply_dot(&r, &mut z, &mut q)
+        };
         cons.project(&mut z);
         let beta = rz_new / rz;
         rz = rz_new;
@@ -313,6 +335,30 @@ fn update_residual(alpha: f64, q: &[V3], r: &mut [V3]) -> f64 {
         }
         s
     })
+}
+
+/// [`update_residual`], and q ← W r with W = ω diag(d)⁻¹ (the weights formed as ω / d_i, as
+/// the multigrid's smoother forms them), in one pass.
+fn update_residual_scaled(alpha: f64, q: &mut [V3], r: &mut [V3], omega: f64, d: &[f64]) -> f64 {
+    let parts: Vec<f64> = r
+        .par_chunks_mut(CHUNK)
+        .zip(q.par_chunks_mut(CHUNK))
+        .enumerate()
+        .map(|(c, (cr, cq))| {
+            let r0 = c * CHUNK;
+            let mut s = 0.0;
+            for (k, (ri, qi)) in cr.iter_mut().zip(cq.iter_mut()).enumerate() {
+                for j in 0..3 {
+                    ri[j] -= alpha * qi[j];
+                }
+                s += ri[0] * ri[0] + ri[1] * ri[1] + ri[2] * ri[2];
+                let w = omega / d[r0 + k];
+                *qi = [w * ri[0], w * ri[1], w * ri[2]];
+            }
+            s
+        })
+        .collect();
+    ordered_sum(parts)
 }
 
 /// The paper's point iteration (Eqs. 22–24) in Jacobi form: Δx_i ← Δx_i + ω (b_i − (A Δx)_i)
