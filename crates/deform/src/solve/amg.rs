@@ -24,7 +24,7 @@ use std::sync::Mutex;
 use rayon::prelude::*;
 
 use super::csr::{Csr, Entry, SymMatrix};
-use super::pcg::Preconditioner;
+use super::pcg::{Preconditioner, Weights};
 use super::vecops::{CHUNK, V3, axpy, chunked_sum};
 use crate::error::{Error, Result};
 
@@ -78,21 +78,6 @@ struct Level {
     p: Transfer,
     /// Smoother damping ω (the weights ω / a_ii are formed when used: no stored vector).
     omega: f64,
-}
-
-/// The damped-Jacobi weights ω / a_ii of one level, formed on use (the same division as a
-/// stored weight vector, bit for bit; one vector less to hold and to read).
-#[derive(Clone, Copy)]
-struct Weights<'a> {
-    omega: f64,
-    diag: &'a [f64],
-}
-
-impl Weights<'_> {
-    #[inline]
-    fn at(self, i: usize) -> f64 {
-        self.omega / self.diag[i]
-    }
 }
 
 /// A smoothed-aggregation multigrid hierarchy over a borrowed ([`Amg::new`]) or owned
@@ -312,6 +297,20 @@ impl<'a, T: Entry> Amg<'a, T> {
     }
 }
 
+impl<T: Entry> Amg<'_, T> {
+    /// One application, r · z returned; `prescaled`: `work` already holds the finest level's
+    /// first pass W r (ignored with a single level, which has no such pass).
+    fn apply_cycle(&self, r: &[V3], z: &mut [V3], work: &mut [V3], prescaled: bool) -> f64 {
+        if self.levels.is_empty() {
+            // A single level: the dense factorisation is the preconditioner.
+            self.chol.solve(r, z);
+            return super::vecops::dot(r, z);
+        }
+        let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        self.cycle(&*self.fine, 0, r, z, work, &mut guard, prescaled)
+    }
+}
+
 impl<T: Entry> Preconditioner for Amg<'_, T> {
     fn apply(&self, r: &[V3], z: &mut [V3]) {
         let mut own = Vec::new();
@@ -326,26 +325,17 @@ impl<T: Entry> Preconditioner for Amg<'_, T> {
     }
     /// r · z from the last smoothing sweep.
     fn apply_dot(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) -> f64 {
-        if self.levels.is_empty() {
-            // A single level: the dense factorisation is the preconditioner.
-            self.chol.solve(r, z);
-            return super::vecops::dot(r, z);
-        }
-        let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        self.cycle(&*self.fine, 0, r, z, work, &mut guard, false)
+        self.apply_cycle(r, z, work, false)
     }
     /// The finest level's first smoothing pass, x = W r with W = ω D⁻¹.
-    fn first_pass(&self) -> Option<(f64, &[f64])> {
-        self.levels
-            .first()
-            .map(|lev| (lev.omega, &self.fine.diag[..]))
+    fn first_pass(&self) -> Option<Weights<'_>> {
+        self.levels.first().map(|lev| Weights {
+            omega: lev.omega,
+            diag: &self.fine.diag,
+        })
     }
     fn apply_dot_prescaled(&self, r: &[V3], z: &mut [V3], work: &mut [V3]) -> f64 {
-        if self.levels.is_empty() {
-            return self.apply_dot(r, z, work);
-        }
-        let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        self.cycle(&*self.fine, 0, r, z, work, &mut guard, true)
+        self.apply_cycle(r, z, work, true)
     }
     fn name(&self) -> &'static str {
         "amg"

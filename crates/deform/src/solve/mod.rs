@@ -14,7 +14,7 @@ pub use amg::{Amg, AmgInfo, AmgOptions};
 pub use csr::{Csr, Entry, Graph, SymMatrix};
 pub use order::reverse_cuthill_mckee;
 pub use pcg::{
-    Constraint, Constraints, Jacobi, Preconditioner, SolveOptions, SolveReport, pcg,
+    Constraint, Constraints, Jacobi, Preconditioner, SolveOptions, SolveReport, Weights, pcg,
     point_iteration,
 };
 pub use vecops::V3;

@@ -62,6 +62,25 @@ impl Constraints {
     }
 }
 
+/// Damped-Jacobi weights w_i = ω / d_i, formed on use (the same division as a stored weight
+/// vector, bit for bit; one vector less to hold and to read): the multigrid's smoother, and
+/// the first pass a preconditioner may leave to PCG ([`Preconditioner::first_pass`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Weights<'a> {
+    /// The damping ω.
+    pub omega: f64,
+    /// The diagonal d.
+    pub diag: &'a [f64],
+}
+
+impl Weights<'_> {
+    /// w_i = ω / d_i.
+    #[inline]
+    pub fn at(self, i: usize) -> f64 {
+        self.omega / self.diag[i]
+    }
+}
+
 /// A preconditioner z = M⁻¹ r (symmetric positive definite), applied to the three components.
 pub trait Preconditioner: Sync {
     /// z ← M⁻¹ r.
@@ -79,11 +98,10 @@ pub trait Preconditioner: Sync {
         self.apply_with(r, z, work);
         dot(r, z)
     }
-    /// The weights of a first pass x = W r the preconditioner starts with, if it has one:
-    /// (ω, d) for W = ω diag(d)⁻¹, each weight formed as ω / d_i. PCG then forms W r in its
-    /// residual update, in `work`, and calls [`Preconditioner::apply_dot_prescaled`]: one
-    /// pass over r less per iteration.
-    fn first_pass(&self) -> Option<(f64, &[f64])> {
+    /// The weights W of a first pass x = W r the preconditioner starts with, if it has one.
+    /// PCG then forms W r in its residual update, in `work`, and calls
+    /// [`Preconditioner::apply_dot_prescaled`]: one pass over r less per iteration.
+    fn first_pass(&self) -> Option<Weights<'_>> {
         None
     }
     /// [`Preconditioner::apply_dot`] with `work` already holding W r (see
@@ -227,7 +245,7 @@ pub fn pcg<P: Preconditioner + ?Sized, T: Entry>(
         let alpha = rz / pq;
         // q is dead once r is updated: it receives the preconditioner's first pass W r.
         rr = match first {
-            Some((omega, d)) => update_residual_scaled(alpha, &mut q, &mut r, omega, d),
+            Some(w) => update_residual_scaled(alpha, &mut q, &mut r, w),
             None => update_residual(alpha, &q, &mut r),
         };
         if rr.sqrt() <= opts.rel_tol * scale || it == opts.max_iters {
@@ -337,9 +355,8 @@ fn update_residual(alpha: f64, q: &[V3], r: &mut [V3]) -> f64 {
     })
 }
 
-/// [`update_residual`], and q ← W r with W = ω diag(d)⁻¹ (the weights formed as ω / d_i, as
-/// the multigrid's smoother forms them), in one pass.
-fn update_residual_scaled(alpha: f64, q: &mut [V3], r: &mut [V3], omega: f64, d: &[f64]) -> f64 {
+/// [`update_residual`], and q ← W r, in one pass.
+fn update_residual_scaled(alpha: f64, q: &mut [V3], r: &mut [V3], w: Weights) -> f64 {
     let parts: Vec<f64> = r
         .par_chunks_mut(CHUNK)
         .zip(q.par_chunks_mut(CHUNK))
@@ -352,8 +369,8 @@ fn update_residual_scaled(alpha: f64, q: &mut [V3], r: &mut [V3], omega: f64, d:
                     ri[j] -= alpha * qi[j];
                 }
                 s += ri[0] * ri[0] + ri[1] * ri[1] + ri[2] * ri[2];
-                let w = omega / d[r0 + k];
-                *qi = [w * ri[0], w * ri[1], w * ri[2]];
+                let wk = w.at(r0 + k);
+                *qi = [wk * ri[0], wk * ri[1], wk * ri[2]];
             }
             s
         })
