@@ -110,7 +110,7 @@ fn triad_gbs(len: usize) -> f64 {
 /// the machine in the same state, so the ratios are steadier than the ratio of two bests
 /// measured apart on a machine whose bandwidth drifts.
 fn paired_ratios<T: Entry>(a: &SymMatrix<T>, triad: &mut Triad, pairs: usize) -> Vec<f64> {
-    let x: Vec<V3> = (0..a.n()).map(|i| [i as f64, 1.0, -1.0]).collect();
+    let x = spmv_input(a.n());
     let mut y = vec![[0.0; 3]; a.n()];
     // One pass of each first, untimed: the first touches fresh pages.
     triad.pass();
@@ -129,13 +129,18 @@ fn paired_ratios<T: Entry>(a: &SymMatrix<T>, triad: &mut Triad, pairs: usize) ->
     ratios
 }
 
+/// The vector the SpMV figures multiply (n entries, all distinct in x).
+fn spmv_input(n: usize) -> Vec<V3> {
+    (0..n).map(|i| [i as f64, 1.0, -1.0]).collect()
+}
+
 /// Bytes one SpMV moves at least: matrix (values, columns, offsets, diagonal), x once, y.
 fn spmv_bytes<T: Entry>(a: &SymMatrix<T>) -> f64 {
     (a.nnz_offdiag() * (4 + std::mem::size_of::<T>()) + a.n() * (8 + 8 + 24 + 24)) as f64
 }
 
 fn spmv_gbs<T: Entry>(a: &SymMatrix<T>) -> f64 {
-    let x: Vec<V3> = (0..a.n()).map(|i| [i as f64, 1.0, -1.0]).collect();
+    let x = spmv_input(a.n());
     let mut y = vec![[0.0; 3]; a.n()];
     let mut best = f64::INFINITY;
     for _ in 0..10 {
@@ -544,7 +549,7 @@ fn benches(c: &mut Criterion) {
     let (m, bc) = case(46);
     let (a, b) = system(&m, &bc);
     let (a, b) = in_deform_order(&m, &a, &b);
-    let x: Vec<V3> = (0..a.n()).map(|i| [i as f64, 1.0, -1.0]).collect();
+    let x = spmv_input(a.n());
     let mut y = vec![[0.0; 3]; a.n()];
     let mut g = c.benchmark_group("kernels");
     g.throughput(Throughput::Elements(a.n() as u64));

@@ -246,9 +246,7 @@ impl<T: Entry> SymMatrix<T> {
         for (&c, &a) in self.cols[r.clone()].iter().zip(&self.vals[r]) {
             let a = a.get();
             let xj = x[c as usize];
-            s[0] = M::mul_add(a, xj[0], s[0]);
-            s[1] = M::mul_add(a, xj[1], s[1]);
-            s[2] = M::mul_add(a, xj[2], s[2]);
+            madd::mul_add3::<M>(a, xj, &mut s);
         }
         s
     }
@@ -317,26 +315,18 @@ impl<T: Entry> SymMatrix<T> {
                 let (va, vb) = (va.get(), vb.get());
                 let xa = x[ca as usize];
                 let xb = x[cb as usize];
-                s[0] = M::mul_add(va, xa[0], s[0]);
-                s[1] = M::mul_add(va, xa[1], s[1]);
-                s[2] = M::mul_add(va, xa[2], s[2]);
-                t[0] = M::mul_add(vb, xb[0], t[0]);
-                t[1] = M::mul_add(vb, xb[1], t[1]);
-                t[2] = M::mul_add(vb, xb[2], t[2]);
+                madd::mul_add3::<M>(va, xa, &mut s);
+                madd::mul_add3::<M>(vb, xb, &mut t);
             }
             for (&ca, &va) in c0[m..].iter().zip(&v0[m..]) {
                 let va = va.get();
                 let xa = x[ca as usize];
-                s[0] = M::mul_add(va, xa[0], s[0]);
-                s[1] = M::mul_add(va, xa[1], s[1]);
-                s[2] = M::mul_add(va, xa[2], s[2]);
+                madd::mul_add3::<M>(va, xa, &mut s);
             }
             for (&cb, &vb) in c1[m..].iter().zip(&v1[m..]) {
                 let vb = vb.get();
                 let xb = x[cb as usize];
-                t[0] = M::mul_add(vb, xb[0], t[0]);
-                t[1] = M::mul_add(vb, xb[1], t[1]);
-                t[2] = M::mul_add(vb, xb[2], t[2]);
+                madd::mul_add3::<M>(vb, xb, &mut t);
             }
             f(i, s);
             f(i + 1, t);

@@ -38,6 +38,14 @@ impl MulAdd for Separate {
     }
 }
 
+/// s ← s + a x for the three components of x and s.
+#[inline(always)]
+pub(crate) fn mul_add3<M: MulAdd>(a: f64, x: [f64; 3], s: &mut [f64; 3]) {
+    s[0] = M::mul_add(a, x[0], s[0]);
+    s[1] = M::mul_add(a, x[1], s[1]);
+    s[2] = M::mul_add(a, x[2], s[2]);
+}
+
 /// A computation generic over the multiply–add ([`run`] picks it for the processor).
 pub(crate) trait Kernel {
     /// What the computation returns.
