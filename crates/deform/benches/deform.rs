@@ -10,7 +10,8 @@
 //! SpMV with the unknowns in other orders (generator, Morton, Morton + RCM).
 //! `DEFORM_AMG_CYCLES`, `DEFORM_AMG_STRENGTH` and `DEFORM_AMG_DAMPING=cS,cP` override the
 //! multigrid options of the solve figures; `DEFORM_BENCH_NO_JACOBI` skips the Jacobi-PCG
-//! solve and `DEFORM_BENCH_SOLVES_ONLY` the whole deformations.
+//! solve and `DEFORM_BENCH_SOLVES_ONLY` the whole deformations; `DEFORM_BENCH_SETUP_REPS=N`
+//! times N multigrid set-ups in a row instead of the solves.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -390,6 +391,20 @@ fn figures() {
                 1e3 * tj / r.iterations.max(1) as f64,
                 r.rel_residual
             );
+        }
+        // `DEFORM_BENCH_SETUP_REPS=N`: N multigrid set-ups in a row, each timed (with
+        // `DEFORM_AMG_TRACE`, per level), instead of the solves.
+        if let Some(reps) = std::env::var("DEFORM_BENCH_SETUP_REPS")
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok())
+        {
+            for _ in 0..reps {
+                let t = Instant::now();
+                let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
+                println!("multigrid set-up {:.3} s", t.elapsed().as_secs_f64());
+                drop(amg);
+            }
+            continue;
         }
         let t = Instant::now();
         let c0 = cpu_s();

@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use super::csr::{Csr, Entry, SymMatrix};
 use super::pcg::{Preconditioner, Weights};
-use super::vecops::{CHUNK, V3, axpy, chunked_sum};
+use super::vecops::{CHUNK, V3, axpy, chunked_sum, row_chunks};
 use crate::error::{Error, Result};
 
 /// Multigrid setup options.
@@ -372,13 +372,10 @@ fn coarsen<T: Entry>(
     }
     let rho = gershgorin(cur);
     let omega = opts.smoother_damping / rho;
-    let mut p = smoothed_prolongator(cur, &agg, nagg, opts.prolongator_damping / rho);
     // The prolongator is stored in single precision; the coarse matrix is the Galerkin
     // product of the rounded P, so the cycle stays a symmetric positive definite
     // preconditioner (every vector stays f64).
-    for v in &mut p.vals {
-        *v = f64::from(*v as f32);
-    }
+    let p = smoothed_prolongator(cur, &agg, nagg, opts.prolongator_damping / rho);
     let t_p = t0.elapsed().as_secs_f64();
     let r = p.transpose();
     let t_r = t0.elapsed().as_secs_f64();
@@ -387,17 +384,14 @@ fn coarsen<T: Entry>(
         eprintln!(
             "amg level {depth}: n {} -> {nagg}, nnz(P) {}, nnz(A_c) {}, aggregate {t_agg:.3} s, P {:.3} s, Pt {:.3} s, RAP {:.3} s",
             cur.n(),
-            p.cols.len(),
+            p.entries.len(),
             ac.cols.len(),
             t_p - t_agg,
             t_r - t_p,
             t0.elapsed().as_secs_f64() - t_r
         );
     }
-    let level = Level {
-        p: Transfer::from(p),
-        omega,
-    };
+    let level = Level { p, omega };
     Some((level, ac))
 }
 
@@ -449,30 +443,118 @@ fn jacobi_sweep_into<M: Entry>(
     })
 }
 
-/// A multigrid prolongator P in CSR form with single-precision values (half the memory and
-/// traffic of f64; products are formed in f64). The restriction uses it too, by rows
-/// ([`restrict_residual`]).
+/// A multigrid transfer operator in CSR form (the prolongator P; in the set-up, also its
+/// transpose R = Pᵀ), each entry its column and its single-precision value side by side:
+/// half the memory and traffic of f64 values, one stream to read, and a row of P (~4 entries
+/// on the finest level) in one cache line, which matters when the Galerkin product gathers
+/// the rows of a node's neighbours. Products are formed in f64. The restriction uses P too,
+/// by rows ([`restrict_residual`]).
 struct Transfer {
+    ncols: usize,
     offsets: Vec<usize>,
-    cols: Vec<u32>,
-    vals: Vec<f32>,
+    entries: Vec<(u32, f32)>,
 }
 
-impl From<Csr> for Transfer {
-    fn from(m: Csr) -> Self {
+impl Transfer {
+    /// Concatenates per-block rows (row lengths, entries), blocks in row order; the entries
+    /// are copied in parallel.
+    fn from_blocks(nrows: usize, ncols: usize, blocks: Vec<(Vec<usize>, Vec<(u32, f32)>)>) -> Self {
+        let mut offsets = Vec::with_capacity(nrows + 1);
+        offsets.push(0usize);
+        let mut last = 0;
+        for l in blocks.iter().flat_map(|b| &b.0) {
+            last += l;
+            offsets.push(last);
+        }
+        let mut entries = vec![(0u32, 0.0f32); last];
+        let mut pieces = Vec::with_capacity(blocks.len());
+        let mut rest = entries.as_mut_slice();
+        for b in &blocks {
+            let (piece, tail) = rest.split_at_mut(b.1.len());
+            pieces.push(piece);
+            rest = tail;
+        }
+        pieces
+            .into_par_iter()
+            .zip(&blocks)
+            .for_each(|(piece, b)| piece.copy_from_slice(&b.1));
         Self {
-            vals: m.vals.iter().map(|&v| v as f32).collect(),
-            offsets: m.offsets,
-            cols: m.cols,
+            ncols,
+            offsets,
+            entries,
+        }
+    }
+
+    fn nrows(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// The entries of row `i`.
+    #[inline]
+    fn row(&self, i: usize) -> &[(u32, f32)] {
+        &self.entries[self.offsets[i]..self.offsets[i + 1]]
+    }
+
+    fn bytes(&self) -> usize {
+        self.offsets.len() * 8 + self.entries.len() * 8
+    }
+
+    /// The transpose (a counting sort): each row of the result lists its entries in
+    /// increasing column order, whatever the thread count.
+    ///
+    /// A serial pass counts each column's entries and finds the first and last rows that
+    /// have one; then [`TRANSPOSE_PARTS`] ranges of columns are filled in parallel, each
+    /// scanning in order only the rows between the first and last of its columns. The
+    /// aggregates of the first pass are numbered in the order of the fine rows, so most
+    /// ranges are short; those of the leftovers come last and span the grid (one scan).
+    fn transpose(&self) -> Self {
+        let (nr, nc) = (self.nrows(), self.ncols);
+        let mut offsets = vec![0usize; nc + 1];
+        let mut first = vec![usize::MAX; nc];
+        let mut last = vec![0usize; nc];
+        for i in 0..nr {
+            for &(c, _) in self.row(i) {
+                let c = c as usize;
+                offsets[c + 1] += 1;
+                first[c] = first[c].min(i);
+                last[c] = i;
+            }
+        }
+        for k in 0..nc {
+            offsets[k + 1] += offsets[k];
+        }
+        let part = nc.div_ceil(TRANSPOSE_PARTS).max(1);
+        let mut entries = vec![(0u32, 0.0f32); self.entries.len()];
+        row_chunks(&mut entries, nc, part, |c| offsets[c])
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(k, out)| {
+                let (lo, hi) = (k * part, ((k + 1) * part).min(nc));
+                let r0 = first[lo..hi].iter().copied().min().unwrap_or(usize::MAX);
+                let r1 = last[lo..hi].iter().copied().max().unwrap_or(0);
+                let mut fill: Vec<usize> =
+                    offsets[lo..hi].iter().map(|o| o - offsets[lo]).collect();
+                for i in r0..=r1 {
+                    for &(c, v) in self.row(i) {
+                        let c = c as usize;
+                        if (lo..hi).contains(&c) {
+                            out[fill[c - lo]] = (i as u32, v);
+                            fill[c - lo] += 1;
+                        }
+                    }
+                }
+            });
+        Self {
+            ncols: nr,
+            offsets,
+            entries,
         }
     }
 }
 
-impl Transfer {
-    fn bytes(&self) -> usize {
-        self.offsets.len() * 8 + self.cols.len() * 4 + self.vals.len() * 4
-    }
-}
+/// Column ranges filled in parallel by [`Transfer::transpose`] (fixed: the result does not
+/// depend on it anyway).
+const TRANSPOSE_PARTS: usize = 16;
 
 /// Fixed number of partial sums of the restriction (independent of the thread count).
 const LANES: usize = 4;
@@ -509,8 +591,7 @@ fn restrict_residual<M: Entry>(
             #[inline(always)]
             |i, v| {
                 let r = [b[i][0] - v[0], b[i][1] - v[1], b[i][2] - v[2]];
-                let span = p.offsets[i]..p.offsets[i + 1];
-                for (&col, &w) in p.cols[span.clone()].iter().zip(&p.vals[span]) {
+                for &(col, w) in p.row(i) {
                     let w = f64::from(w);
                     let e = &mut acc[col as usize];
                     e[0] += w * r[0];
@@ -541,9 +622,7 @@ fn spmv_csr_add(m: &Transfer, x: &[V3], y: &mut [V3]) {
     y.par_chunks_mut(CHUNK).enumerate().for_each(|(c, ys)| {
         let r0 = c * CHUNK;
         for (k, yi) in ys.iter_mut().enumerate() {
-            let i = r0 + k;
-            let span = m.offsets[i]..m.offsets[i + 1];
-            for (&col, &v) in m.cols[span.clone()].iter().zip(&m.vals[span]) {
+            for &(col, v) in m.row(r0 + k) {
                 let v = f64::from(v);
                 let xj = x[col as usize];
                 yi[0] += v * xj[0];
@@ -643,19 +722,42 @@ fn aggregate<T: Entry>(a: &SymMatrix<T>, theta: f64) -> (Vec<u32>, usize) {
 /// added to its aggregate's entry found by a linear search, in the row's order — the sums of
 /// a stable sort by column followed by merging (`merge_row`), bit for bit — and only the
 /// distinct entries are sorted.
-fn smoothed_prolongator<T: Entry>(a: &SymMatrix<T>, agg: &[u32], nagg: usize, omega: f64) -> Csr {
-    Csr::from_rows(a.n(), nagg, |i, buf| {
-        let mut add = |c: u32, v: f64| match buf.iter_mut().find(|e| e.0 == c) {
-            Some(e) => e.1 += v,
-            None => buf.push((c, v)),
-        };
-        add(agg[i], 1.0 - omega);
-        let s = omega / a.diag[i];
-        for p in a.offsets[i]..a.offsets[i + 1] {
-            add(agg[a.cols[p] as usize], -s * a.vals[p].get());
-        }
-        buf.sort_unstable_by_key(|e| e.0);
-    })
+///
+/// The values are rounded to single precision as they are stored; rows are computed in
+/// parallel blocks of [`CHUNK`] rows, each row by one task.
+fn smoothed_prolongator<T: Entry>(
+    a: &SymMatrix<T>,
+    agg: &[u32],
+    nagg: usize,
+    omega: f64,
+) -> Transfer {
+    let n = a.n();
+    let blocks: Vec<(Vec<usize>, Vec<(u32, f32)>)> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|b| {
+            let (lo, hi) = (b * CHUNK, ((b + 1) * CHUNK).min(n));
+            let mut lens = Vec::with_capacity(hi - lo);
+            let mut entries = Vec::with_capacity(4 * (hi - lo));
+            let mut buf: Vec<(u32, f64)> = Vec::new();
+            for i in lo..hi {
+                buf.clear();
+                let mut add = |c: u32, v: f64| match buf.iter_mut().find(|e| e.0 == c) {
+                    Some(e) => e.1 += v,
+                    None => buf.push((c, v)),
+                };
+                add(agg[i], 1.0 - omega);
+                let s = omega / a.diag[i];
+                for p in a.offsets[i]..a.offsets[i + 1] {
+                    add(agg[a.cols[p] as usize], -s * a.vals[p].get());
+                }
+                buf.sort_unstable_by_key(|e| e.0);
+                lens.push(buf.len());
+                entries.extend(buf.iter().map(|&(c, v)| (c, v as f32)));
+            }
+            (lens, entries)
+        })
+        .collect();
+    Transfer::from_blocks(n, nagg, blocks)
 }
 
 /// Dense accumulator for sparse row products (per task scratch). An entry belongs to the
@@ -708,133 +810,105 @@ impl Acc {
     }
 }
 
-/// The scratch of one Galerkin task: the accumulator, the local index of the fine rows of
-/// A P the block needs (`u32::MAX` elsewhere), their list, and the block's rows of A P.
-/// Kept in a pool and reused from block to block: fresh buffers of this size cost more in
-/// page faults than the products written into them.
-struct GalerkinScratch {
-    acc: Acc,
-    loc: Vec<u32>,
-    need: Vec<u32>,
-    ap_off: Vec<usize>,
-    ap_c: Vec<u32>,
-    ap_v: Vec<f64>,
+/// Rows of a sparse matrix computed by `row(i, acc)` into a dense accumulator over `ncols`
+/// columns, row-parallel over blocks of [`CHUNK`] rows (each task takes an accumulator from
+/// a pool and gives it back: fresh accumulators of this size cost more in page faults than
+/// the rows they sum). A row's columns come sorted when `sorted`, otherwise in first-touch
+/// order. Every row is summed by one task in the order `row` adds its terms, so the result
+/// does not depend on the thread count. The blocks are returned as they are: (row lengths,
+/// columns, values) each.
+fn accumulated_rows<F>(nrows: usize, ncols: usize, sorted: bool, row: F) -> Vec<RowBlock>
+where
+    F: Fn(usize, &mut Acc) + Sync,
+{
+    let pool: Mutex<Vec<Acc>> = Mutex::new(Vec::new());
+    (0..nrows.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|b| {
+            let taken = pool.lock().unwrap_or_else(|e| e.into_inner()).pop();
+            let mut acc = taken.unwrap_or_else(|| Acc::new(ncols));
+            let lo = b * CHUNK;
+            let hi = (lo + CHUNK).min(nrows);
+            let mut offsets = Vec::with_capacity(hi - lo + 1);
+            offsets.push(0);
+            let (mut cols, mut vals) = (Vec::new(), Vec::new());
+            for i in lo..hi {
+                row(i, &mut acc);
+                acc.drain(&mut cols, &mut vals, sorted);
+                offsets.push(cols.len());
+            }
+            pool.lock().unwrap_or_else(|e| e.into_inner()).push(acc);
+            RowBlock {
+                offsets,
+                cols,
+                vals,
+            }
+        })
+        .collect()
 }
 
-/// Coarse rows per task of the Galerkin product.
-const GALERKIN_ROWS: usize = 4096;
+/// [`CHUNK`] consecutive rows of a matrix built by [`accumulated_rows`].
+struct RowBlock {
+    offsets: Vec<usize>,
+    cols: Vec<u32>,
+    vals: Vec<f64>,
+}
 
 /// A_c = R A P with R = Pᵀ, returned with its diagonal apart.
 ///
-/// Row-parallel over blocks of [`GALERKIN_ROWS`] coarse rows; each block first computes the
-/// rows of A P it needs (the fine rows in its rows of R), then its rows of R (A P), both with
-/// a dense accumulator (the rows of A P are left unsorted: only the rows of A_c need their
-/// columns in order). A P is never held whole (it has ~2× the entries of A: the largest
-/// temporary of the set-up otherwise); the fine rows shared by neighbouring blocks are
-/// computed once per block. Every row is computed by one task in a fixed order, so the
-/// result does not depend on the thread count (nor on the block size, nor on which pooled
-/// scratch a block gets).
-fn galerkin<T: Entry>(a: &SymMatrix<T>, p: &Csr, r: &Csr) -> SymMatrix {
+/// First A P, row-parallel and never sorted (only the rows of A_c need their columns in
+/// order), kept in its blocks of rows; then the rows of R (A P), row-parallel. Both use a
+/// dense accumulator ([`accumulated_rows`]). A P has ~2.5× the entries of P (~110 MB at 1M
+/// nodes), held only during this product, before the solves' vectors exist.
+fn galerkin<T: Entry>(a: &SymMatrix<T>, p: &Transfer, r: &Transfer) -> SymMatrix {
     let nc = p.ncols;
-    let n = a.n();
-    let ap_row = |i: usize, acc: &mut Acc| {
+    let ap = accumulated_rows(a.n(), nc, false, |i, acc| {
         let d = a.diag[i];
-        for q in p.offsets[i]..p.offsets[i + 1] {
-            acc.add(p.cols[q], d * p.vals[q]);
+        for &(c, w) in p.row(i) {
+            acc.add(c, d * f64::from(w));
         }
         for k in a.offsets[i]..a.offsets[i + 1] {
             let j = a.cols[k] as usize;
             let v = a.vals[k].get();
-            for q in p.offsets[j]..p.offsets[j + 1] {
-                acc.add(p.cols[q], v * p.vals[q]);
+            for &(c, w) in p.row(j) {
+                acc.add(c, v * f64::from(w));
             }
         }
-    };
-    let pool: Mutex<Vec<GalerkinScratch>> = Mutex::new(Vec::new());
-    let blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..nc.div_ceil(GALERKIN_ROWS))
-        .into_par_iter()
-        .map(|b| {
-            let taken = pool.lock().unwrap_or_else(|e| e.into_inner()).pop();
-            let mut st = taken.unwrap_or_else(|| GalerkinScratch {
-                acc: Acc::new(nc),
-                loc: vec![u32::MAX; n],
-                need: Vec::new(),
-                ap_off: Vec::new(),
-                ap_c: Vec::new(),
-                ap_v: Vec::new(),
-            });
-            let GalerkinScratch {
-                acc,
-                loc,
-                need,
-                ap_off,
-                ap_c,
-                ap_v,
-            } = &mut st;
-            let lo = b * GALERKIN_ROWS;
-            let hi = (lo + GALERKIN_ROWS).min(nc);
-            // The fine rows of A P this block needs, and A P on them.
-            // Mark them, then collect them in increasing order over the marked range
-            // (no sort of the ~100 entries per coarse row).
-            const MARK: u32 = u32::MAX - 1;
-            let (mut first, mut last) = (usize::MAX, 0);
-            for &i in &r.cols[r.offsets[lo]..r.offsets[hi]] {
-                loc[i as usize] = MARK;
-                first = first.min(i as usize);
-                last = last.max(i as usize);
+    });
+    let rap = accumulated_rows(nc, nc, true, |i, acc| {
+        for &(f, w) in r.row(i) {
+            let w = f64::from(w);
+            let (f, k) = (f as usize / CHUNK, f as usize % CHUNK);
+            let blk = &ap[f];
+            let span = blk.offsets[k]..blk.offsets[k + 1];
+            for (&c, &v) in blk.cols[span.clone()].iter().zip(&blk.vals[span]) {
+                acc.add(c, w * v);
             }
-            need.clear();
-            if first <= last {
-                need.extend((first..=last).filter(|&i| loc[i] == MARK).map(|i| i as u32));
-            }
-            ap_off.clear();
-            ap_c.clear();
-            ap_v.clear();
-            ap_off.push(0usize);
-            for (k, &i) in need.iter().enumerate() {
-                loc[i as usize] = k as u32;
-                ap_row(i as usize, acc);
-                acc.drain(ap_c, ap_v, false);
-                ap_off.push(ap_c.len());
-            }
-            // Rows lo..hi of R (A P).
-            let mut lens = Vec::with_capacity(hi - lo);
-            let (mut cols, mut vals) = (Vec::new(), Vec::new());
-            for i in lo..hi {
-                for k in r.offsets[i]..r.offsets[i + 1] {
-                    let l = loc[r.cols[k] as usize] as usize;
-                    let v = r.vals[k];
-                    for q in ap_off[l]..ap_off[l + 1] {
-                        acc.add(ap_c[q], v * ap_v[q]);
-                    }
-                }
-                lens.push(acc.drain(&mut cols, &mut vals, true));
-            }
-            for &i in need.iter() {
-                loc[i as usize] = u32::MAX;
-            }
-            pool.lock().unwrap_or_else(|e| e.into_inner()).push(st);
-            (lens, cols, vals)
-        })
-        .collect();
-    let rap = Csr::from_blocks(nc, nc, blocks);
-    // Split off the diagonal and symmetrise round-off: a_ij ← (a_ij + a_ji) / 2 is not
-    // needed for CG's correctness, the product RAP is symmetric up to round-off only.
+        }
+    });
+    drop(ap);
+    // Split off the diagonal. The product is symmetric up to round-off only; CG does not
+    // need a_ij = a_ji to the last bit, so they are not averaged.
+    let nnz: usize = rap.iter().map(|b| b.cols.len()).sum();
     let mut diag = vec![0.0; nc];
-    let mut offsets = vec![0usize; nc + 1];
-    let mut cols = Vec::with_capacity(rap.cols.len());
-    let mut vals = Vec::with_capacity(rap.cols.len());
-    for i in 0..nc {
-        for q in rap.offsets[i]..rap.offsets[i + 1] {
-            let c = rap.cols[q];
-            if c as usize == i {
-                diag[i] = rap.vals[q];
-            } else {
-                cols.push(c);
-                vals.push(rap.vals[q]);
+    let mut offsets = Vec::with_capacity(nc + 1);
+    offsets.push(0usize);
+    let mut cols = Vec::with_capacity(nnz.saturating_sub(nc));
+    let mut vals = Vec::with_capacity(nnz.saturating_sub(nc));
+    for (bk, blk) in rap.iter().enumerate() {
+        for (k, span) in blk.offsets.windows(2).enumerate() {
+            let i = bk * CHUNK + k;
+            for q in span[0]..span[1] {
+                let c = blk.cols[q];
+                if c as usize == i {
+                    diag[i] = blk.vals[q];
+                } else {
+                    cols.push(c);
+                    vals.push(blk.vals[q]);
+                }
             }
+            offsets.push(cols.len());
         }
-        offsets[i + 1] = cols.len();
     }
     SymMatrix {
         diag,
@@ -934,51 +1008,113 @@ mod tests {
     }
 
     #[test]
-    fn galerkin_product_equals_the_dense_product() {
-        let (a, _) = crate::solve::tests::grid_system(9, 8, 7);
-        let (agg, nagg) = aggregate(&a, 0.0);
-        let p = smoothed_prolongator(&a, &agg, nagg, 1.6 / gershgorin(&a));
-        let ac = galerkin(&a, &p, &p.transpose());
-        ac.validate(1e-12).unwrap();
-        // Dense Pᵀ A P.
-        let ad = a.to_dense();
-        let n = a.n();
-        let mut pd = vec![vec![0.0; nagg]; n];
-        for (i, row) in pd.iter_mut().enumerate() {
-            let (cs, vs) = p.row(i);
-            for (&c, &v) in cs.iter().zip(vs) {
-                row[c as usize] = v;
+    fn transpose_equals_the_dense_transpose_for_any_thread_count() {
+        // 3001 × 40 with rows of 0 to 4 entries (a prolongator's shape), an empty column,
+        // and columns whose rows span the whole matrix: every column range of the parallel
+        // fill is exercised, with row ranges of every kind.
+        let (nr, nc) = (3001, 40);
+        // Two blocks of rows, as the prolongator's are built.
+        let block = |rows: std::ops::Range<usize>| {
+            let (mut lens, mut entries) = (Vec::new(), Vec::new());
+            for i in rows {
+                let near = (i * nc / nr) as u32;
+                let mut row: Vec<(u32, f32)> = Vec::new();
+                for c in [near, near + 1, (i % 7) as u32 * 5 + 3, 39] {
+                    if c != 4 && (c as usize) < nc && i % 5 != 0 && !row.iter().any(|e| e.0 == c) {
+                        row.push((c, (i as f32 + 0.25) * (c as f32 + 1.0)));
+                    }
+                }
+                row.sort_unstable_by_key(|e| e.0);
+                lens.push(row.len());
+                entries.extend(row);
+            }
+            (lens, entries)
+        };
+        let m = Transfer::from_blocks(nr, nc, vec![block(0..1700), block(1700..nr)]);
+        let t1 = testkit::with_threads(1, || m.transpose());
+        let t3 = testkit::with_threads(3, || m.transpose());
+        assert_eq!(
+            (t1.offsets.clone(), t1.entries.clone()),
+            (t3.offsets, t3.entries)
+        );
+        assert_eq!((t1.nrows(), t1.ncols), (nc, nr));
+        let mut dense = vec![vec![0.0f32; nr]; nc];
+        for i in 0..nr {
+            for &(c, v) in m.row(i) {
+                dense[c as usize][i] = v;
             }
         }
-        let ap: Vec<Vec<f64>> = (0..n)
-            .map(|i| {
-                (0..nagg)
-                    .map(|c| (0..n).map(|k| ad[i][k] * pd[k][c]).sum())
-                    .collect()
-            })
-            .collect();
-        let acd = ac.to_dense();
-        let scale = ac.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-        for c in 0..nagg {
-            for e in 0..nagg {
-                let want: f64 = (0..n).map(|i| pd[i][c] * ap[i][e]).sum();
-                assert!(
-                    (acd[c][e] - want).abs() <= 1e-12 * scale,
-                    "({c}, {e}): {} vs {want}",
-                    acd[c][e]
-                );
+        for (c, want) in dense.iter().enumerate() {
+            let row = t1.row(c);
+            assert!(
+                row.windows(2).all(|w| w[0].0 < w[1].0),
+                "column {c} in row order"
+            );
+            let mut got = vec![0.0f32; nr];
+            for &(i, v) in row {
+                got[i as usize] = v;
             }
+            assert_eq!(&got, want, "column {c}");
         }
-        // Rows sorted by column, as in every matrix of the hierarchy.
-        for i in 0..nagg {
-            assert!(ac.row(i).0.windows(2).all(|w| w[0] < w[1]), "row {i}");
+        assert!(t1.row(4).is_empty());
+        let back = t1.transpose();
+        assert_eq!((back.offsets, back.entries), (m.offsets, m.entries));
+    }
+
+    #[test]
+    fn galerkin_product_equals_a_sparse_map_product() {
+        use std::collections::BTreeMap;
+        // 210 unknowns, and 4896 (A P in two blocks of rows).
+        for (nx, ny, nz) in [(9, 8, 7), (20, 19, 18)] {
+            let (a, _) = crate::solve::tests::grid_system(nx, ny, nz);
+            let (agg, nagg) = aggregate(&a, 0.0);
+            let p = smoothed_prolongator(&a, &agg, nagg, 1.6 / gershgorin(&a));
+            let ac = galerkin(&a, &p, &p.transpose());
+            ac.validate(1e-12).unwrap();
+            // Pᵀ (A P) summed entry by entry in ordered maps.
+            let n = a.n();
+            assert_eq!(n, (nx - 2) * (ny - 2) * (nz - 2));
+            let ap: Vec<BTreeMap<u32, f64>> = (0..n)
+                .map(|i| {
+                    let mut row = BTreeMap::new();
+                    let (cols, vals) = a.row(i);
+                    let terms = std::iter::once((i, a.diag[i]))
+                        .chain(cols.iter().zip(vals).map(|(&k, &v)| (k as usize, v)));
+                    for (k, v) in terms {
+                        for &(c, w) in p.row(k) {
+                            *row.entry(c).or_insert(0.0) += v * f64::from(w);
+                        }
+                    }
+                    row
+                })
+                .collect();
+            let mut want = vec![BTreeMap::<u32, f64>::new(); nagg];
+            for (i, row) in ap.iter().enumerate() {
+                for &(c, w) in p.row(i) {
+                    for (&e, &v) in row {
+                        *want[c as usize].entry(e).or_insert(0.0) += f64::from(w) * v;
+                    }
+                }
+            }
+            let scale = ac.diag.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+            for (c, row) in want.iter().enumerate() {
+                let (cols, _) = ac.row(c);
+                // Rows sorted by column, as in every matrix of the hierarchy.
+                assert!(cols.windows(2).all(|w| w[0] < w[1]), "row {c}");
+                assert_eq!(cols.len() + 1, row.len(), "row {c}: its pattern");
+                for (&e, &v) in row {
+                    let got = ac.get(c, e as usize);
+                    assert!((got - v).abs() <= 1e-12 * scale, "({c}, {e}): {got} vs {v}");
+                }
+            }
         }
     }
 
     #[test]
     fn prolongator_rows_equal_sorted_merge_bit_for_bit() {
+        // 4896 unknowns (two blocks of rows), and 140.
         for (a, _) in [
-            crate::solve::tests::grid_system(12, 11, 10),
+            crate::solve::tests::grid_system(20, 19, 18),
             crate::solve::tests::grid_system(7, 9, 6),
         ] {
             let (agg, nagg) = aggregate(&a, 0.0);
@@ -993,12 +1129,16 @@ mod tests {
                 super::super::csr::merge_row(buf);
             });
             assert_eq!(p.offsets, reference.offsets);
-            assert_eq!(p.cols, reference.cols);
+            // The merged sums, rounded to single precision.
+            let rounded: Vec<(u32, f32)> = (reference.cols.iter().zip(&reference.vals))
+                .map(|(&c, &v)| (c, v as f32))
+                .collect();
+            assert_eq!(p.entries.len(), rounded.len());
             assert!(
-                p.vals
+                p.entries
                     .iter()
-                    .zip(&reference.vals)
-                    .all(|(x, y)| x.to_bits() == y.to_bits())
+                    .zip(&rounded)
+                    .all(|(x, y)| x.0 == y.0 && x.1.to_bits() == y.1.to_bits())
             );
         }
     }

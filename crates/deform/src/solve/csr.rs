@@ -15,7 +15,7 @@
 use rayon::prelude::*;
 
 use super::madd::{self, Kernel, MulAdd};
-use super::vecops::{CHUNK, V3, chunked_sum, row_chunks};
+use super::vecops::{CHUNK, V3, chunked_sum};
 use crate::error::{Error, Result};
 
 /// A node graph: for node i, its neighbours are `adj[offsets[i]..offsets[i + 1]]`.
@@ -523,52 +523,6 @@ impl Csr {
         let r = self.offsets[i]..self.offsets[i + 1];
         (&self.cols[r.clone()], &self.vals[r])
     }
-
-    /// The transpose (a counting sort; each row of the result lists its entries in
-    /// increasing column order, whatever the thread count).
-    pub fn transpose(&self) -> Self {
-        let (nr, nc) = (self.nrows(), self.ncols);
-        let mut offsets = vec![0usize; nc + 1];
-        for &c in &self.cols {
-            offsets[c as usize + 1] += 1;
-        }
-        for k in 0..nc {
-            offsets[k + 1] += offsets[k];
-        }
-        // Four ranges of columns (rows of the result) filled in parallel, each scanning the
-        // rows in order: every column gets its entries in row order, as a sequential fill.
-        let part = nc.div_ceil(4).max(1);
-        let mut cols = vec![0u32; self.cols.len()];
-        let mut vals = vec![0.0; self.vals.len()];
-        let cparts = row_chunks(&mut cols, nc, part, |c| offsets[c]);
-        let vparts = row_chunks(&mut vals, nc, part, |c| offsets[c]);
-        cparts
-            .into_par_iter()
-            .zip(vparts)
-            .enumerate()
-            .for_each(|(k, (cs, vs))| {
-                let (lo, hi) = (k * part, ((k + 1) * part).min(nc));
-                let mut fill: Vec<usize> =
-                    offsets[lo..hi].iter().map(|o| o - offsets[lo]).collect();
-                for i in 0..nr {
-                    for p in self.offsets[i]..self.offsets[i + 1] {
-                        let c = self.cols[p] as usize;
-                        if (lo..hi).contains(&c) {
-                            let f = &mut fill[c - lo];
-                            cs[*f] = i as u32;
-                            vs[*f] = self.vals[p];
-                            *f += 1;
-                        }
-                    }
-                }
-            });
-        Self {
-            ncols: nr,
-            offsets,
-            cols,
-            vals,
-        }
-    }
 }
 
 /// Sorts (column, value) pairs by column (stable) and sums duplicates in their order (the
@@ -586,50 +540,4 @@ pub(crate) fn merge_row(buf: &mut Vec<(u32, f64)>) {
         }
     }
     buf.truncate(w);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn transpose_equals_the_dense_transpose_for_any_thread_count() {
-        // 3001 × 10 with rows of 0 to 4 entries (a prolongator's shape), and an empty
-        // column: every column range of the parallel fill is exercised.
-        let (nr, nc) = (3001, 10);
-        let m = Csr::from_rows(nr, nc, |i, buf| {
-            for k in 0..i % 5 {
-                let c = ((i * 7 + k * 3) % nc) as u32;
-                if c != 4 && !buf.iter().any(|e| e.0 == c) {
-                    buf.push((c, (i as f64 + 0.25) * (k as f64 + 1.0)));
-                }
-            }
-            buf.sort_unstable_by_key(|e| e.0);
-        });
-        let t1 = testkit::with_threads(1, || m.transpose());
-        let t3 = testkit::with_threads(3, || m.transpose());
-        assert_eq!(t1, t3);
-        assert_eq!((t1.nrows(), t1.ncols), (nc, nr));
-        let mut dense = vec![vec![0.0; nr]; nc];
-        for i in 0..nr {
-            let (cs, vs) = m.row(i);
-            for (&c, &v) in cs.iter().zip(vs) {
-                dense[c as usize][i] = v;
-            }
-        }
-        for (c, want) in dense.iter().enumerate() {
-            let (rows, vs) = t1.row(c);
-            assert!(
-                rows.windows(2).all(|w| w[0] < w[1]),
-                "column {c} in row order"
-            );
-            let mut got = vec![0.0; nr];
-            for (&i, &v) in rows.iter().zip(vs) {
-                got[i as usize] = v;
-            }
-            assert_eq!(&got, want, "column {c}");
-        }
-        assert!(t1.row(4).0.is_empty());
-        assert_eq!(t1.transpose(), m);
-    }
 }
