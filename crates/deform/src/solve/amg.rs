@@ -23,7 +23,7 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
-use super::csr::{Csr, Entry, SymMatrix};
+use super::csr::{Entry, SymMatrix};
 use super::pcg::{Preconditioner, Weights};
 use super::vecops::{CHUNK, V3, axpy, chunked_sum, row_chunks};
 use crate::error::{Error, Result};
@@ -458,7 +458,7 @@ struct Transfer {
 impl Transfer {
     /// Concatenates per-block rows (row lengths, entries), blocks in row order; the entries
     /// are copied in parallel.
-    fn from_blocks(nrows: usize, ncols: usize, blocks: Vec<(Vec<usize>, Vec<(u32, f32)>)>) -> Self {
+    fn from_blocks(nrows: usize, ncols: usize, blocks: Vec<TransferRows>) -> Self {
         let mut offsets = Vec::with_capacity(nrows + 1);
         offsets.push(0usize);
         let mut last = 0;
@@ -551,6 +551,9 @@ impl Transfer {
         }
     }
 }
+
+/// Consecutive rows of a [`Transfer`] being built: their lengths and their entries.
+type TransferRows = (Vec<usize>, Vec<(u32, f32)>);
 
 /// Column ranges filled in parallel by [`Transfer::transpose`] (fixed: the result does not
 /// depend on it anyway).
@@ -732,7 +735,7 @@ fn smoothed_prolongator<T: Entry>(
     omega: f64,
 ) -> Transfer {
     let n = a.n();
-    let blocks: Vec<(Vec<usize>, Vec<(u32, f32)>)> = (0..n.div_ceil(CHUNK))
+    let blocks: Vec<TransferRows> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|b| {
             let (lo, hi) = (b * CHUNK, ((b + 1) * CHUNK).min(n));
@@ -989,6 +992,7 @@ impl DenseCholesky {
 
 #[cfg(test)]
 mod tests {
+    use super::super::csr::Csr;
     use super::*;
 
     #[test]
