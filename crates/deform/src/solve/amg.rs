@@ -814,58 +814,120 @@ impl Acc {
 }
 
 /// Rows of a sparse matrix computed by `row(i, acc)` into a dense accumulator over `ncols`
-/// columns, row-parallel over blocks of [`CHUNK`] rows (each task takes an accumulator from
-/// a pool and gives it back: fresh accumulators of this size cost more in page faults than
-/// the rows they sum). A row's columns come sorted when `sorted`, otherwise in first-touch
-/// order. Every row is summed by one task in the order `row` adds its terms, so the result
-/// does not depend on the thread count. The blocks are returned as they are: (row lengths,
-/// columns, values) each.
-fn accumulated_rows<F>(nrows: usize, ncols: usize, sorted: bool, row: F) -> Vec<RowBlock>
+/// columns, row-parallel over blocks of [`CHUNK`] rows. A row's columns come sorted when
+/// `sorted`, otherwise in first-touch order. Every row is summed by one task in the order
+/// `row` adds its terms, so the result does not depend on the thread count.
+///
+/// Each task takes a scratch from a pool (an accumulator, whose fresh pages would cost more
+/// than the rows summed into it, and a [`RowStore`]), appends its blocks' rows to the
+/// store, and gives the scratch back; the blocks remember which store holds them. A store
+/// starts with room for `reserve` entries: few large buffers instead of one per block,
+/// which the C allocator maps on their own and returns to the system when dropped (at 1M
+/// nodes glibc kept all 113 MB of A P's per-block buffers after they were freed).
+fn accumulated_rows<F>(nrows: usize, ncols: usize, sorted: bool, reserve: usize, row: F) -> Rows
 where
     F: Fn(usize, &mut Acc) + Sync,
 {
-    let pool: Mutex<Vec<Acc>> = Mutex::new(Vec::new());
-    (0..nrows.div_ceil(CHUNK))
+    struct Task {
+        id: usize,
+        acc: Acc,
+        store: RowStore,
+    }
+    let pool: Mutex<(Vec<Task>, usize)> = Mutex::new((Vec::new(), 0));
+    let blocks = (0..nrows.div_ceil(CHUNK))
         .into_par_iter()
         .map(|b| {
-            let taken = pool.lock().unwrap_or_else(|e| e.into_inner()).pop();
-            let mut acc = taken.unwrap_or_else(|| Acc::new(ncols));
+            let mut st = {
+                let mut guard = pool.lock().unwrap_or_else(|e| e.into_inner());
+                match guard.0.pop() {
+                    Some(st) => st,
+                    None => {
+                        guard.1 += 1;
+                        Task {
+                            id: guard.1 - 1,
+                            acc: Acc::new(ncols),
+                            store: RowStore {
+                                cols: Vec::with_capacity(reserve),
+                                vals: Vec::with_capacity(reserve),
+                            },
+                        }
+                    }
+                }
+            };
             let lo = b * CHUNK;
             let hi = (lo + CHUNK).min(nrows);
             let mut offsets = Vec::with_capacity(hi - lo + 1);
-            offsets.push(0);
-            let (mut cols, mut vals) = (Vec::new(), Vec::new());
+            offsets.push(st.store.cols.len());
             for i in lo..hi {
-                row(i, &mut acc);
-                acc.drain(&mut cols, &mut vals, sorted);
+                row(i, &mut st.acc);
+                let RowStore { cols, vals } = &mut st.store;
+                st.acc.drain(cols, vals, sorted);
                 offsets.push(cols.len());
             }
-            pool.lock().unwrap_or_else(|e| e.into_inner()).push(acc);
-            RowBlock {
-                offsets,
-                cols,
-                vals,
-            }
+            let id = st.id;
+            pool.lock().unwrap_or_else(|e| e.into_inner()).0.push(st);
+            (id, offsets)
         })
-        .collect()
+        .collect();
+    let mut tasks = pool.into_inner().unwrap_or_else(|e| e.into_inner()).0;
+    tasks.sort_unstable_by_key(|st| st.id);
+    Rows {
+        blocks,
+        stores: tasks.into_iter().map(|st| st.store).collect(),
+    }
 }
 
-/// [`CHUNK`] consecutive rows of a matrix built by [`accumulated_rows`].
-struct RowBlock {
-    offsets: Vec<usize>,
+/// Rows appended by the tasks of [`accumulated_rows`] (one store per task).
+struct RowStore {
     cols: Vec<u32>,
     vals: Vec<f64>,
 }
 
+/// A matrix built by [`accumulated_rows`]: for each block of [`CHUNK`] rows, the store that
+/// holds it and its rows' offsets there.
+struct Rows {
+    blocks: Vec<(usize, Vec<usize>)>,
+    stores: Vec<RowStore>,
+}
+
+impl Rows {
+    /// The columns and values of row `i`.
+    #[inline]
+    fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let (s, offsets) = &self.blocks[i / CHUNK];
+        let k = i % CHUNK;
+        let st = &self.stores[*s];
+        let span = offsets[k]..offsets[k + 1];
+        (&st.cols[span.clone()], &st.vals[span])
+    }
+
+    /// Stored entries.
+    fn nnz(&self) -> usize {
+        self.stores.iter().map(|st| st.cols.len()).sum()
+    }
+}
+
+/// Entries from which a task's [`RowStore`] is reserved whole: 36 MB of column indices,
+/// beyond glibc's largest threshold for mapping a block on its own (32 MB).
+const LARGE_STORE: usize = 9 << 20;
+
 /// A_c = R A P with R = Pᵀ, returned with its diagonal apart.
 ///
 /// First A P, row-parallel and never sorted (only the rows of A_c need their columns in
-/// order), kept in its blocks of rows; then the rows of R (A P), row-parallel. Both use a
-/// dense accumulator ([`accumulated_rows`]). A P has ~2.5× the entries of P (~110 MB at 1M
-/// nodes), held only during this product, before the solves' vectors exist.
+/// order); then the rows of R (A P), row-parallel. Both use a dense accumulator
+/// ([`accumulated_rows`]). A P has ~2.5× the entries of P (~110 MB at 1M nodes), held only
+/// during this product, before the solves' vectors exist.
 fn galerkin<T: Entry>(a: &SymMatrix<T>, p: &Transfer, r: &Transfer) -> SymMatrix {
     let nc = p.ncols;
-    let ap = accumulated_rows(a.n(), nc, false, |i, acc| {
+    // Room for A P's entries in each task's store (~2.5 per entry of P; measured 2.44 at
+    // 1M nodes): a large product reserves stores that are mapped on their own.
+    let per_task = 5 * p.entries.len() / 2 / rayon::current_num_threads().max(1);
+    let reserve = if per_task >= LARGE_STORE / 4 {
+        per_task.max(LARGE_STORE)
+    } else {
+        per_task
+    };
+    let ap = accumulated_rows(a.n(), nc, false, reserve, |i, acc| {
         let d = a.diag[i];
         for &(c, w) in p.row(i) {
             acc.add(c, d * f64::from(w));
@@ -878,13 +940,11 @@ fn galerkin<T: Entry>(a: &SymMatrix<T>, p: &Transfer, r: &Transfer) -> SymMatrix
             }
         }
     });
-    let rap = accumulated_rows(nc, nc, true, |i, acc| {
+    let rap = accumulated_rows(nc, nc, true, 0, |i, acc| {
         for &(f, w) in r.row(i) {
             let w = f64::from(w);
-            let (f, k) = (f as usize / CHUNK, f as usize % CHUNK);
-            let blk = &ap[f];
-            let span = blk.offsets[k]..blk.offsets[k + 1];
-            for (&c, &v) in blk.cols[span.clone()].iter().zip(&blk.vals[span]) {
+            let (cols, vals) = ap.row(f as usize);
+            for (&c, &v) in cols.iter().zip(vals) {
                 acc.add(c, w * v);
             }
         }
@@ -892,26 +952,23 @@ fn galerkin<T: Entry>(a: &SymMatrix<T>, p: &Transfer, r: &Transfer) -> SymMatrix
     drop(ap);
     // Split off the diagonal. The product is symmetric up to round-off only; CG does not
     // need a_ij = a_ji to the last bit, so they are not averaged.
-    let nnz: usize = rap.iter().map(|b| b.cols.len()).sum();
+    let nnz = rap.nnz();
     let mut diag = vec![0.0; nc];
     let mut offsets = Vec::with_capacity(nc + 1);
     offsets.push(0usize);
     let mut cols = Vec::with_capacity(nnz.saturating_sub(nc));
     let mut vals = Vec::with_capacity(nnz.saturating_sub(nc));
-    for (bk, blk) in rap.iter().enumerate() {
-        for (k, span) in blk.offsets.windows(2).enumerate() {
-            let i = bk * CHUNK + k;
-            for q in span[0]..span[1] {
-                let c = blk.cols[q];
-                if c as usize == i {
-                    diag[i] = blk.vals[q];
-                } else {
-                    cols.push(c);
-                    vals.push(blk.vals[q]);
-                }
+    for (i, d) in diag.iter_mut().enumerate() {
+        let (cs, vs) = rap.row(i);
+        for (&c, &v) in cs.iter().zip(vs) {
+            if c as usize == i {
+                *d = v;
+            } else {
+                cols.push(c);
+                vals.push(v);
             }
-            offsets.push(cols.len());
         }
+        offsets.push(cols.len());
     }
     SymMatrix {
         diag,
