@@ -907,8 +907,9 @@ impl Rows {
     }
 }
 
-/// Entries from which a task's [`RowStore`] is reserved whole: 36 MB of column indices,
-/// beyond glibc's largest threshold for mapping a block on its own (32 MB).
+/// The least reserve of a task's [`RowStore`] in a large Galerkin product, in entries: 36 MB
+/// of column indices (and 72 MB of values), beyond glibc's largest threshold for mapping an
+/// allocation on its own (32 MB). Only the pages written become resident.
 const LARGE_STORE: usize = 9 << 20;
 
 /// A_c = R A P with R = Pᵀ, returned with its diagonal apart.
