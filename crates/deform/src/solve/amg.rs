@@ -23,7 +23,7 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
-use super::csr::{Entry, SymMatrix};
+use super::csr::{Entry, SymMatrix, build_rows};
 use super::pcg::{Preconditioner, Weights};
 use super::vecops::{CHUNK, V3, axpy, chunked_sum, row_chunks};
 use crate::error::{Error, Result};
@@ -456,35 +456,6 @@ struct Transfer {
 }
 
 impl Transfer {
-    /// Concatenates per-block rows (row lengths, entries), blocks in row order; the entries
-    /// are copied in parallel.
-    fn from_blocks(nrows: usize, ncols: usize, blocks: Vec<TransferRows>) -> Self {
-        let mut offsets = Vec::with_capacity(nrows + 1);
-        offsets.push(0usize);
-        let mut last = 0;
-        for l in blocks.iter().flat_map(|b| &b.0) {
-            last += l;
-            offsets.push(last);
-        }
-        let mut entries = vec![(0u32, 0.0f32); last];
-        let mut pieces = Vec::with_capacity(blocks.len());
-        let mut rest = entries.as_mut_slice();
-        for b in &blocks {
-            let (piece, tail) = rest.split_at_mut(b.1.len());
-            pieces.push(piece);
-            rest = tail;
-        }
-        pieces
-            .into_par_iter()
-            .zip(&blocks)
-            .for_each(|(piece, b)| piece.copy_from_slice(&b.1));
-        Self {
-            ncols,
-            offsets,
-            entries,
-        }
-    }
-
     fn nrows(&self) -> usize {
         self.offsets.len() - 1
     }
@@ -551,9 +522,6 @@ impl Transfer {
         }
     }
 }
-
-/// Consecutive rows of a [`Transfer`] being built: their lengths and their entries.
-type TransferRows = (Vec<usize>, Vec<(u32, f32)>);
 
 /// Column ranges filled in parallel by [`Transfer::transpose`] (fixed: the result does not
 /// depend on it anyway).
@@ -726,41 +694,34 @@ fn aggregate<T: Entry>(a: &SymMatrix<T>, theta: f64) -> (Vec<u32>, usize) {
 /// a stable sort by column followed by merging (`merge_row`), bit for bit — and only the
 /// distinct entries are sorted.
 ///
-/// The values are rounded to single precision as they are stored; rows are computed in
-/// parallel blocks of [`CHUNK`] rows, each row by one task.
+/// The values are rounded to single precision as they are stored ([`build_rows`]).
 fn smoothed_prolongator<T: Entry>(
     a: &SymMatrix<T>,
     agg: &[u32],
     nagg: usize,
     omega: f64,
 ) -> Transfer {
-    let n = a.n();
-    let blocks: Vec<TransferRows> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|b| {
-            let (lo, hi) = (b * CHUNK, ((b + 1) * CHUNK).min(n));
-            let mut lens = Vec::with_capacity(hi - lo);
-            let mut entries = Vec::with_capacity(4 * (hi - lo));
-            let mut buf: Vec<(u32, f64)> = Vec::new();
-            for i in lo..hi {
-                buf.clear();
-                let mut add = |c: u32, v: f64| match buf.iter_mut().find(|e| e.0 == c) {
-                    Some(e) => e.1 += v,
-                    None => buf.push((c, v)),
-                };
-                add(agg[i], 1.0 - omega);
-                let s = omega / a.diag[i];
-                for p in a.offsets[i]..a.offsets[i + 1] {
-                    add(agg[a.cols[p] as usize], -s * a.vals[p].get());
-                }
-                buf.sort_unstable_by_key(|e| e.0);
-                lens.push(buf.len());
-                entries.extend(buf.iter().map(|&(c, v)| (c, v as f32)));
+    let (offsets, entries) = build_rows(
+        a.n(),
+        |i, buf| {
+            let mut add = |c: u32, v: f64| match buf.iter_mut().find(|e| e.0 == c) {
+                Some(e) => e.1 += v,
+                None => buf.push((c, v)),
+            };
+            add(agg[i], 1.0 - omega);
+            let s = omega / a.diag[i];
+            for p in a.offsets[i]..a.offsets[i + 1] {
+                add(agg[a.cols[p] as usize], -s * a.vals[p].get());
             }
-            (lens, entries)
-        })
-        .collect();
-    Transfer::from_blocks(n, nagg, blocks)
+            buf.sort_unstable_by_key(|e| e.0);
+        },
+        |(c, v)| (c, v as f32),
+    );
+    Transfer {
+        ncols: nagg,
+        offsets,
+        entries,
+    }
 }
 
 /// Dense accumulator for sparse row products (per task scratch). An entry belongs to the
@@ -1075,24 +1036,24 @@ mod tests {
         // and columns whose rows span the whole matrix: every column range of the parallel
         // fill is exercised, with row ranges of every kind.
         let (nr, nc) = (3001, 40);
-        // Two blocks of rows, as the prolongator's are built.
-        let block = |rows: std::ops::Range<usize>| {
-            let (mut lens, mut entries) = (Vec::new(), Vec::new());
-            for i in rows {
+        let (offsets, entries) = build_rows(
+            nr,
+            |i, row| {
                 let near = (i * nc / nr) as u32;
-                let mut row: Vec<(u32, f32)> = Vec::new();
                 for c in [near, near + 1, (i % 7) as u32 * 5 + 3, 39] {
                     if c != 4 && (c as usize) < nc && i % 5 != 0 && !row.iter().any(|e| e.0 == c) {
-                        row.push((c, (i as f32 + 0.25) * (c as f32 + 1.0)));
+                        row.push((c, (i as f64 + 0.25) * (c as f64 + 1.0)));
                     }
                 }
                 row.sort_unstable_by_key(|e| e.0);
-                lens.push(row.len());
-                entries.extend(row);
-            }
-            (lens, entries)
+            },
+            |(c, v)| (c, v as f32),
+        );
+        let m = Transfer {
+            ncols: nc,
+            offsets,
+            entries,
         };
-        let m = Transfer::from_blocks(nr, nc, vec![block(0..1700), block(1700..nr)]);
         let t1 = testkit::with_threads(1, || m.transpose());
         let t3 = testkit::with_threads(3, || m.transpose());
         assert_eq!(

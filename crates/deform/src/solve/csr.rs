@@ -460,55 +460,13 @@ impl Csr {
     }
 
     /// Builds the matrix from rows computed independently in parallel (deterministic: each
-    /// row by one task).
+    /// row by one task; [`build_rows`]).
     pub(crate) fn from_rows<F>(nrows: usize, ncols: usize, row: F) -> Self
     where
         F: Fn(usize, &mut Vec<(u32, f64)>) + Sync,
     {
-        let blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (0..nrows.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|b| {
-                let lo = b * CHUNK;
-                let hi = (lo + CHUNK).min(nrows);
-                let mut lens = Vec::with_capacity(hi - lo);
-                let mut cols = Vec::new();
-                let mut vals = Vec::new();
-                let mut buf = Vec::new();
-                for i in lo..hi {
-                    buf.clear();
-                    row(i, &mut buf);
-                    lens.push(buf.len());
-                    for &(c, v) in &buf {
-                        cols.push(c);
-                        vals.push(v);
-                    }
-                }
-                (lens, cols, vals)
-            })
-            .collect();
-        Self::from_blocks(nrows, ncols, blocks)
-    }
-
-    /// Concatenates per-block rows (row lengths, columns, values), blocks in row order.
-    pub(crate) fn from_blocks(
-        nrows: usize,
-        ncols: usize,
-        blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)>,
-    ) -> Self {
-        let total: usize = blocks.iter().map(|b| b.1.len()).sum();
-        let mut offsets = Vec::with_capacity(nrows + 1);
-        offsets.push(0usize);
-        let mut cols = Vec::with_capacity(total);
-        let mut vals = Vec::with_capacity(total);
-        let mut last = 0;
-        for (lens, c, v) in blocks {
-            for l in lens {
-                last += l;
-                offsets.push(last);
-            }
-            cols.extend_from_slice(&c);
-            vals.extend_from_slice(&v);
-        }
+        let (offsets, entries) = build_rows(nrows, row, |e| e);
+        let (cols, vals) = entries.into_iter().unzip();
         Self {
             ncols,
             offsets,
@@ -523,6 +481,55 @@ impl Csr {
         let r = self.offsets[i]..self.offsets[i + 1];
         (&self.cols[r.clone()], &self.vals[r])
     }
+}
+
+/// The rows of a sparse matrix, computed in parallel blocks of [`CHUNK`] rows: `row(i, buf)`
+/// fills row i's (column, value) pairs into an empty buffer and `put` turns each pair into a
+/// stored entry. Returns the row offsets and the entries, the blocks copied into place in
+/// parallel. Each row is computed by one task, so the result does not depend on the thread
+/// count.
+pub(crate) fn build_rows<E, F, P>(nrows: usize, row: F, put: P) -> (Vec<usize>, Vec<E>)
+where
+    E: Copy + Default + Send + Sync,
+    F: Fn(usize, &mut Vec<(u32, f64)>) + Sync,
+    P: Fn((u32, f64)) -> E + Sync,
+{
+    let blocks: Vec<(Vec<usize>, Vec<E>)> = (0..nrows.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|b| {
+            let (lo, hi) = (b * CHUNK, ((b + 1) * CHUNK).min(nrows));
+            let mut lens = Vec::with_capacity(hi - lo);
+            let mut entries = Vec::new();
+            let mut buf = Vec::new();
+            for i in lo..hi {
+                buf.clear();
+                row(i, &mut buf);
+                lens.push(buf.len());
+                entries.extend(buf.iter().map(|&e| put(e)));
+            }
+            (lens, entries)
+        })
+        .collect();
+    let mut offsets = Vec::with_capacity(nrows + 1);
+    offsets.push(0usize);
+    let mut last = 0;
+    for l in blocks.iter().flat_map(|b| &b.0) {
+        last += l;
+        offsets.push(last);
+    }
+    let mut entries = vec![E::default(); last];
+    let mut pieces = Vec::with_capacity(blocks.len());
+    let mut rest = entries.as_mut_slice();
+    for b in &blocks {
+        let (piece, tail) = rest.split_at_mut(b.1.len());
+        pieces.push(piece);
+        rest = tail;
+    }
+    pieces
+        .into_par_iter()
+        .zip(&blocks)
+        .for_each(|(piece, b)| piece.copy_from_slice(&b.1));
+    (offsets, entries)
 }
 
 /// Sorts (column, value) pairs by column (stable) and sums duplicates in their order (the
