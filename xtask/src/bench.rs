@@ -2,8 +2,9 @@
 //! crates (all crates with a bench by default), then reads criterion's results of this run
 //! (`target/criterion/**/new/{benchmark,estimates}.json` written after the start) and prints
 //! one table of medians and throughputs, also written to `target/bench/summary.md` with the
-//! machine's core count and load average before and after, so that figures copied into
-//! `docs/performance.md` carry the conditions they were measured in.
+//! machine's core count and load average before and after, so that figures logged in
+//! `docs/perf-log/` (and summarised in `docs/performance.md`, "How to measure") carry the
+//! conditions they were measured in.
 
 use std::path::{Path, PathBuf};
 use std::time::SystemTime;

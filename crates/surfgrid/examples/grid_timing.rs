@@ -1,5 +1,5 @@
-//! CPU-time figures for `docs/performance.md` (the machine is shared, so wall-clock criterion
-//! figures are pessimistic): generation of the whole wing-body fixture, the update after a
+//! CPU-time figures for the surfgrid table of `docs/performance.md`, logged by date in
+//! `docs/perf-log/` (the machine is shared, so wall-clock criterion figures are pessimistic): generation of the whole wing-body fixture, the update after a
 //! fuselage radius change of +5 %, and the evaluation at frozen parameters, each timed by the
 //! process's CPU time (user + system, from `/proc/self/stat`, Linux) and by the wall clock.
 //!
