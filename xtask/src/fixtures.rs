@@ -24,7 +24,7 @@ use geom_db::prelude::{Matrix3, Point3, Vector3};
 use geom_db::{
     Arc, CheckOptions, CornerId, CurveCompId, CurveComponent, CurveId, GeomDb, Orientation,
     OrientedCurve, Patch, Side, SupportCurve, SupportSurface, SurfaceComponent, SurfaceId,
-    eval::ParamSurface,
+    eval::ParamSurface, merge::PointMerger,
 };
 
 /// Builds all fixtures, checks them and writes them atomically; then (unless
@@ -184,6 +184,8 @@ pub const SPHERE_DEGREE: usize = 8;
 struct Builder {
     db: GeomDb,
     tol: f64,
+    /// The corners, merged within `tol` (geom-db's point merger).
+    corners: PointMerger,
     /// (start, end, midpoint, component) of edges made from patch borders.
     edges: Vec<(CornerId, CornerId, Point3, CurveCompId)>,
 }
@@ -195,27 +197,22 @@ impl Builder {
         Self {
             db,
             tol: 1e-8 * model_size,
+            corners: PointMerger::new(1e-8 * model_size),
             edges: Vec::new(),
         }
     }
 
     fn corner(&mut self, p: Point3, name: &str) -> CornerId {
-        if let Some(i) = self
-            .db
-            .corners
-            .iter()
-            .position(|c| (c.point - p).norm() <= self.tol)
-        {
-            if self.db.corners[i].name.is_empty() {
-                self.db.corners[i].name = name.to_string();
-            }
-            return CornerId::from_index(i);
+        let m = self.corners.insert(p);
+        if m.new {
+            self.db.corners.push(geom_db::Corner {
+                point: p,
+                name: name.to_string(),
+            });
+        } else if self.db.corners[m.index].name.is_empty() {
+            self.db.corners[m.index].name = name.to_string();
         }
-        self.db.corners.push(geom_db::Corner {
-            point: p,
-            name: name.to_string(),
-        });
-        CornerId::from_index(self.db.corners.len() - 1)
+        CornerId::from_index(m.index)
     }
 
     fn surface(&mut self, s: SupportSurface) -> SurfaceId {

@@ -1,7 +1,6 @@
 //! The geometric database (§2.1, §3) as one serde type, its validation, RON I/O, tolerances
 //! and control nodes.
 
-use std::collections::HashMap;
 use std::io::{BufRead, Write};
 use std::sync::Arc as Shared;
 
@@ -11,6 +10,7 @@ use crate::control::{self, MAX_DEGREE};
 use crate::curve::SupportCurve;
 use crate::error::{Entity, Error, Result};
 use crate::ids::{ControlNodeId, CornerId, CurveCompId, CurveId, SurfCompId, SurfaceId};
+use crate::merge::PointMerger;
 use crate::prelude::Point3;
 use crate::surface::SupportSurface;
 use crate::topology::{Corner, CurveComponent, SurfaceComponent};
@@ -910,8 +910,9 @@ impl GeomDb {
 
     /// Creates control nodes for every arc and patch from its coefficients (R = V A at the
     /// Chebyshev–Lobatto nodes), sharing one node between all control points that lie within
-    /// the "same point" tolerance of each other (so neighbouring patches, arcs and surfaces
-    /// share their border control nodes), then re-solves every arc and patch from the shared
+    /// the "same point" tolerance of each other ([`PointMerger`]: a point joins the nearest
+    /// earlier node within the tolerance, so neighbouring patches, arcs and surfaces share
+    /// their border control nodes), then re-solves every arc and patch from the shared
     /// nodes so that shared borders are the same polynomial, and records the baseline.
     ///
     /// Coefficients change only where points were merged (by at most the tolerance) and by
@@ -919,7 +920,7 @@ impl GeomDb {
     pub fn assign_control_nodes(&mut self) -> Result<()> {
         self.validate_structure_only()?;
         let tol = self.tolerances().same_point.abs;
-        let mut merger = Merger::new(tol);
+        let mut merger = PointMerger::new(tol);
         let mut curve_ids = Vec::with_capacity(self.curves.len());
         for c in &self.curves {
             let per_arc: Vec<Vec<ControlNodeId>> = c
@@ -928,7 +929,7 @@ impl GeomDb {
                 .map(|a| {
                     a.control_points()
                         .into_iter()
-                        .map(|p| merger.insert(p))
+                        .map(|p| ControlNodeId::from_index(merger.insert(p).index))
                         .collect()
                 })
                 .collect();
@@ -942,7 +943,7 @@ impl GeomDb {
                 .map(|p| {
                     p.control_points()
                         .into_iter()
-                        .map(|q| merger.insert(q))
+                        .map(|q| ControlNodeId::from_index(merger.insert(q).index))
                         .collect()
                 })
                 .collect();
@@ -954,7 +955,7 @@ impl GeomDb {
         for (s, ids) in self.surfaces.iter_mut().zip(surf_ids) {
             s.control.nodes = ids;
         }
-        let pts = merger.points;
+        let pts = merger.into_points();
         self.control_nodes = pts.clone();
         self.baseline = None;
         self.set_control_points(&pts)?;
@@ -982,66 +983,5 @@ impl GeomDb {
         use crate::eval::ParamCurve;
         let cc = self.curve_component(id);
         self.curve(cc.curve).point(cc.param_at(s))
-    }
-}
-
-/// Deduplicates points within a tolerance with a hash grid (deterministic: a point joins the
-/// first earlier point within the tolerance).
-struct Merger {
-    tol: f64,
-    cell: f64,
-    grid: HashMap<[i64; 3], Vec<u32>>,
-    points: Vec<Point3>,
-}
-
-impl Merger {
-    fn new(tol: f64) -> Self {
-        let cell = if tol > 0.0 { tol } else { f64::MIN_POSITIVE };
-        Self {
-            tol,
-            cell,
-            grid: HashMap::new(),
-            points: Vec::new(),
-        }
-    }
-
-    fn key(&self, p: &Point3) -> [i64; 3] {
-        [
-            (p.x / self.cell).floor() as i64,
-            (p.y / self.cell).floor() as i64,
-            (p.z / self.cell).floor() as i64,
-        ]
-    }
-
-    fn insert(&mut self, p: Point3) -> ControlNodeId {
-        let k = self.key(&p);
-        let mut best: Option<u32> = None;
-        for dx in -1i64..=1 {
-            for dy in -1i64..=1 {
-                for dz in -1i64..=1 {
-                    let kk = [
-                        k[0].saturating_add(dx),
-                        k[1].saturating_add(dy),
-                        k[2].saturating_add(dz),
-                    ];
-                    if let Some(list) = self.grid.get(&kk) {
-                        for &i in list {
-                            if (self.points[i as usize] - p).norm() <= self.tol
-                                && best.is_none_or(|b| i < b)
-                            {
-                                best = Some(i);
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        if let Some(i) = best {
-            return ControlNodeId(i);
-        }
-        let i = self.points.len() as u32;
-        self.points.push(p);
-        self.grid.entry(k).or_default().push(i);
-        ControlNodeId(i)
     }
 }

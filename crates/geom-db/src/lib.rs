@@ -27,6 +27,7 @@ pub mod error;
 pub mod eval;
 pub mod ids;
 pub mod import;
+pub mod merge;
 pub mod poly;
 pub mod prelude;
 pub mod surface;
