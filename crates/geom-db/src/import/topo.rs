@@ -16,6 +16,7 @@ use crate::curve::{Arc, SupportCurve};
 use crate::db::GeomDb;
 use crate::eval::ParamSurface;
 use crate::ids::{CornerId, CurveCompId, CurveId, SurfaceId};
+use crate::merge::PointMerger;
 use crate::prelude::Point3;
 use crate::surface::{Side, SupportSurface};
 use crate::topology::{Corner, CurveComponent, Orientation, OrientedCurve, SurfaceComponent};
@@ -491,31 +492,6 @@ fn domain_loop(s: &SupportSurface) -> Vec<Vec<Arc>> {
     ]
 }
 
-/// Greedy deterministic clustering of points within `tol`.
-struct Corners {
-    tol: f64,
-    points: Vec<Point3>,
-}
-
-impl Corners {
-    fn find_or_add(&mut self, p: Point3) -> (CornerId, f64) {
-        let mut best: Option<(usize, f64)> = None;
-        for (i, q) in self.points.iter().enumerate() {
-            let d = (q - p).norm();
-            if d <= self.tol && best.is_none_or(|b| d < b.1) {
-                best = Some((i, d));
-            }
-        }
-        match best {
-            Some((i, d)) => (CornerId::from_index(i), d),
-            None => {
-                self.points.push(p);
-                (CornerId::from_index(self.points.len() - 1), 0.0)
-            }
-        }
-    }
-}
-
 /// ∮ G dv over a closed polygon in a surface's global parameters, with
 /// G(u, v) = ∫_0^u x·(r_u × r_v)(s, v) ds (Green's theorem: the integral of x·N over the
 /// enclosed region, counted positively for a counter-clockwise polygon).
@@ -753,17 +729,13 @@ pub fn import(file: &IgesFile, opts: &ImportOptions) -> Result<(GeomDb, ImportRe
     }
 
     // Corners.
-    let mut corners = Corners {
-        tol: sew,
-        points: Vec::new(),
-    };
+    let mut corners = PointMerger::new(sew);
     let mut max_gap: f64 = 0.0;
     let mut edge_corners = Vec::with_capacity(edges.len());
     for e in &edges {
-        let (a, da) = corners.find_or_add(e.start);
-        let (b, db) = corners.find_or_add(e.end);
-        max_gap = max_gap.max(da).max(db);
-        edge_corners.push((a, b));
+        let (a, b) = (corners.insert(e.start), corners.insert(e.end));
+        max_gap = max_gap.max(a.distance).max(b.distance);
+        edge_corners.push((CornerId::from_index(a.index), CornerId::from_index(b.index)));
     }
 
     // T-junctions: a corner inside another edge splits that edge there.
@@ -779,7 +751,7 @@ pub fn import(file: &IgesFile, opts: &ImportOptions) -> Result<(GeomDb, ImportRe
         }
         let n = ed.arcs.len() as f64;
         let mut cuts: Vec<(f64, CornerId)> = Vec::new();
-        for (ci, c) in corners.points.iter().enumerate() {
+        for (ci, c) in corners.points().iter().enumerate() {
             let cid = CornerId::from_index(ci);
             if cid == edge_corners[e].0 || cid == edge_corners[e].1 {
                 continue;
@@ -901,7 +873,7 @@ pub fn import(file: &IgesFile, opts: &ImportOptions) -> Result<(GeomDb, ImportRe
     let mut db = GeomDb::empty(model_name);
     db.units = ctx.report.units.clone();
     db.corners = corners
-        .points
+        .points()
         .iter()
         .map(|&p| Corner {
             point: p,
