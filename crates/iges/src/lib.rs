@@ -13,9 +13,11 @@
 //!   with a clear message. Every error names the file and the physical line or directory
 //!   entry (`"geom.igs: entity at D line 57 (type 128): parameter 12: ..."`); corrupt input
 //!   never panics.
-//! * [`Entity`]: typed entities 100, 102, 104, 110, 112, 114, 116, 118, 120, 122, 124, 126,
-//!   128, 141, 142, 143, 144, 186, 314, 502, 504, 508, 510, 514; other types are kept as raw
-//!   parameters and listed in [`IgesFile::warnings`].
+//! * [`Entity`]: typed entities 100, 102, 104, 106, 108, 110, 112, 114, 116, 118, 120, 122,
+//!   123, 124, 126, 128, 130, 140, 141, 142, 143, 144, 186, 190, 192, 194, 196, 198, 314, 502,
+//!   504, 508, 510, 514 ([`SUPPORTED_TYPES`]); other types are kept as raw parameters and
+//!   listed in [`IgesFile::warnings`]. Form-dependent layouts (the reference direction of
+//!   the form-1 analytic surfaces 190–198) are decoded by the directory entry's form.
 //! * [`IgesFile::write`]: the same entities back to the fixed form, with sequence numbers,
 //!   parameter-data pointers and back-pointers; reading the output gives the same entities.
 //! * [`IgesFile::transform`]: the chain of 124 transformation matrices applying to an

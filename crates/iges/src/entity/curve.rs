@@ -1,5 +1,6 @@
-//! Curve entities: 100 circular arc, 102 composite curve, 104 conic arc, 110 line, 112
-//! parametric spline curve, 126 rational B-spline curve.
+//! Curve entities: 100 circular arc, 102 composite curve, 104 conic arc, 106 copious
+//! data, 110 line, 112 parametric spline curve, 126 rational B-spline curve, 130 offset
+//! curve.
 
 use super::{Dec, Enc, write_err};
 use crate::directory::DeId;
@@ -284,5 +285,149 @@ impl BSplineCurve {
         e.reals(&self.range);
         e.reals(&self.normal.unwrap_or([0.0; 3]));
         Ok(())
+    }
+}
+
+/// 106 copious data: a list of points, read as a polyline through them. The form says
+/// what the data is (1–3: a point set, 11–13: a piecewise linear curve, 63: a closed
+/// planar curve; 20–40: drafting forms); `ip` says how the tuples are laid out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CopiousData {
+    /// IP: 1 (x, y) pairs on the plane z = `z`, 2 (x, y, z) triples, 3 (x, y, z, i, j, k)
+    /// sextuples (a point and a vector).
+    pub ip: i64,
+    /// ZT: the common z of IP = 1 (0 otherwise).
+    pub z: f64,
+    /// The points (for IP = 1, z is `z`).
+    pub points: Vec<[f64; 3]>,
+    /// The vectors of IP = 3 (empty otherwise).
+    pub vectors: Vec<[f64; 3]>,
+}
+
+impl CopiousData {
+    pub(crate) fn decode(d: &mut Dec) -> Result<Self, EntityProblem> {
+        let iip = d.index();
+        let ip = d.int("IP (interpretation flag)")?;
+        let per = match ip {
+            1 => 2,
+            2 => 3,
+            3 => 6,
+            v => {
+                return Err(EntityProblem::Param {
+                    index: iip,
+                    expected: "1, 2 or 3 (IP)".into(),
+                    found: v.to_string(),
+                });
+            }
+        };
+        let ino = d.index();
+        let n = d.int("N (number of tuples)")?;
+        let z = if ip == 1 { d.real("ZT")? } else { 0.0 };
+        let n = d.check_count(ino, "N (number of tuples)", n, per, 0, 0)?;
+        let mut points = Vec::with_capacity(n);
+        let mut vectors = Vec::with_capacity(if ip == 3 { n } else { 0 });
+        for _ in 0..n {
+            match ip {
+                1 => {
+                    let [x, y] = d.reals("point")?;
+                    points.push([x, y, z]);
+                }
+                2 => points.push(d.reals("point")?),
+                _ => {
+                    points.push(d.reals("point")?);
+                    vectors.push(d.reals("vector")?);
+                }
+            }
+        }
+        Ok(CopiousData {
+            ip,
+            z,
+            points,
+            vectors,
+        })
+    }
+    pub(crate) fn encode(&self, e: &mut Enc) -> Result<(), EntityProblem> {
+        if !(1..=3).contains(&self.ip) || (self.ip == 3 && self.vectors.len() != self.points.len())
+        {
+            return Err(write_err(format!(
+                "106 with IP = {} needs IP 1, 2 or 3 (and one vector per point for 3), has {} points and {} vectors",
+                self.ip,
+                self.points.len(),
+                self.vectors.len()
+            )));
+        }
+        e.int(self.ip);
+        e.len(self.points.len());
+        if self.ip == 1 {
+            e.real(self.z);
+        }
+        for (k, p) in self.points.iter().enumerate() {
+            match self.ip {
+                1 => e.reals(&p[..2]),
+                2 => e.reals(p),
+                _ => {
+                    e.reals(p);
+                    e.reals(&self.vectors[k]);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// 130 offset curve: the base curve offset in its plane, O(t) = C(t) + d(t) (C'(t) × V) /
+/// |C'(t) × V|, for t between `range[0]` and `range[1]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffsetCurve {
+    /// BC: the base curve.
+    pub base: DeId,
+    /// FLAG: 1 constant distance `d1`, 2 varying linearly from `d1` at `td1` to `d2` at
+    /// `td2`, 3 given by a coordinate of the curve `function`.
+    pub flag: i64,
+    /// BDDC: the curve whose coordinate gives the distance (FLAG = 3).
+    pub function: Option<DeId>,
+    /// NDIM: which coordinate of `function` (1 x, 2 y, 3 z).
+    pub function_coordinate: i64,
+    /// PF: the linear taper (FLAG = 2) is a function of 1 arc length, 2 parameter.
+    pub taper: i64,
+    /// D1: first offset distance.
+    pub d1: f64,
+    /// TD1: arc length or parameter of D1.
+    pub td1: f64,
+    /// D2: second offset distance.
+    pub d2: f64,
+    /// TD2: arc length or parameter of D2.
+    pub td2: f64,
+    /// (VX, VY, VZ): unit normal of the plane of the base curve.
+    pub normal: [f64; 3],
+    /// TT1, TT2: parameter range of the offset curve (on the base curve's parameter).
+    pub range: [f64; 2],
+}
+
+impl OffsetCurve {
+    pub(crate) fn decode(d: &mut Dec) -> Result<Self, EntityProblem> {
+        Ok(OffsetCurve {
+            base: d.ptr("base curve")?,
+            flag: d.int("FLAG")?,
+            function: d.opt_ptr("distance function curve")?,
+            function_coordinate: d.int("NDIM")?,
+            taper: d.int("PF")?,
+            d1: d.real("D1")?,
+            td1: d.real("TD1")?,
+            d2: d.real("D2")?,
+            td2: d.real("TD2")?,
+            normal: d.reals("plane normal")?,
+            range: d.reals("parameter range")?,
+        })
+    }
+    pub(crate) fn encode(&self, e: &mut Enc) {
+        e.ptr(self.base);
+        e.int(self.flag);
+        e.opt_ptr(self.function);
+        e.int(self.function_coordinate);
+        e.int(self.taper);
+        e.reals(&[self.d1, self.td1, self.d2, self.td2]);
+        e.reals(&self.normal);
+        e.reals(&self.range);
     }
 }

@@ -7,14 +7,22 @@
 mod brep;
 mod curve;
 mod other;
+mod solid;
 mod surface;
 mod trim;
 
 pub use brep::{Edge, EdgeList, Face, Loop, LoopEdge, ManifoldSolid, Shell, VertexList};
-pub use curve::{BSplineCurve, CircularArc, CompositeCurve, ConicArc, Line, SplineCurve};
-pub use other::{ColorDefinition, Point, TransformationMatrix};
+pub use curve::{
+    BSplineCurve, CircularArc, CompositeCurve, ConicArc, CopiousData, Line, OffsetCurve,
+    SplineCurve,
+};
+pub use other::{ColorDefinition, Direction, Point, TransformationMatrix};
+pub use solid::{
+    ConicalSurface, CylindricalSurface, PlaneSurface, SphericalSurface, ToroidalSurface,
+};
 pub use surface::{
-    BSplineSurface, RuledSurface, SplineSurface, SurfaceOfRevolution, TabulatedCylinder,
+    BSplineSurface, OffsetSurface, Plane, RuledSurface, SplineSurface, SurfaceOfRevolution,
+    TabulatedCylinder,
 };
 pub use trim::{Boundary, BoundaryCurve, BoundedSurface, CurveOnSurface, TrimmedSurface};
 
@@ -33,6 +41,10 @@ pub enum Entity {
     CompositeCurve(CompositeCurve),
     /// 104 conic arc.
     ConicArc(ConicArc),
+    /// 106 copious data (point sets, polylines).
+    CopiousData(CopiousData),
+    /// 108 plane.
+    Plane(Plane),
     /// 110 line.
     Line(Line),
     /// 112 parametric spline curve.
@@ -47,12 +59,18 @@ pub enum Entity {
     SurfaceOfRevolution(SurfaceOfRevolution),
     /// 122 tabulated cylinder.
     TabulatedCylinder(TabulatedCylinder),
+    /// 123 direction.
+    Direction(Direction),
     /// 124 transformation matrix.
     TransformationMatrix(TransformationMatrix),
     /// 126 rational B-spline curve.
     BSplineCurve(BSplineCurve),
     /// 128 rational B-spline surface.
     BSplineSurface(BSplineSurface),
+    /// 130 offset curve.
+    OffsetCurve(OffsetCurve),
+    /// 140 offset surface.
+    OffsetSurface(OffsetSurface),
     /// 141 boundary.
     Boundary(Boundary),
     /// 142 curve on a parametric surface.
@@ -63,6 +81,16 @@ pub enum Entity {
     TrimmedSurface(TrimmedSurface),
     /// 186 manifold solid B-rep object.
     ManifoldSolid(ManifoldSolid),
+    /// 190 plane surface.
+    PlaneSurface(PlaneSurface),
+    /// 192 right circular cylindrical surface.
+    CylindricalSurface(CylindricalSurface),
+    /// 194 right circular conical surface.
+    ConicalSurface(ConicalSurface),
+    /// 196 spherical surface.
+    SphericalSurface(SphericalSurface),
+    /// 198 toroidal surface.
+    ToroidalSurface(ToroidalSurface),
     /// 314 colour definition.
     ColorDefinition(ColorDefinition),
     /// 502 vertex list.
@@ -80,9 +108,9 @@ pub enum Entity {
 }
 
 /// The entity types decoded into typed structs.
-pub const SUPPORTED_TYPES: [i32; 24] = [
-    100, 102, 104, 110, 112, 114, 116, 118, 120, 122, 124, 126, 128, 141, 142, 143, 144, 186, 314,
-    502, 504, 508, 510, 514,
+pub const SUPPORTED_TYPES: [i32; 34] = [
+    100, 102, 104, 106, 108, 110, 112, 114, 116, 118, 120, 122, 123, 124, 126, 128, 130, 140, 141,
+    142, 143, 144, 186, 190, 192, 194, 196, 198, 314, 502, 504, 508, 510, 514,
 ];
 
 impl Entity {
@@ -104,6 +132,8 @@ impl Entity {
             100 => Entity::CircularArc(CircularArc::decode(&mut d)?),
             102 => Entity::CompositeCurve(CompositeCurve::decode(&mut d)?),
             104 => Entity::ConicArc(ConicArc::decode(&mut d)?),
+            106 => Entity::CopiousData(CopiousData::decode(&mut d)?),
+            108 => Entity::Plane(Plane::decode(&mut d)?),
             110 => Entity::Line(Line::decode(&mut d)?),
             112 => Entity::SplineCurve(SplineCurve::decode(&mut d)?),
             114 => Entity::SplineSurface(SplineSurface::decode(&mut d)?),
@@ -111,14 +141,22 @@ impl Entity {
             118 => Entity::RuledSurface(RuledSurface::decode(&mut d)?),
             120 => Entity::SurfaceOfRevolution(SurfaceOfRevolution::decode(&mut d)?),
             122 => Entity::TabulatedCylinder(TabulatedCylinder::decode(&mut d)?),
+            123 => Entity::Direction(Direction::decode(&mut d)?),
             124 => Entity::TransformationMatrix(TransformationMatrix::decode(&mut d)?),
             126 => Entity::BSplineCurve(BSplineCurve::decode(&mut d)?),
             128 => Entity::BSplineSurface(BSplineSurface::decode(&mut d)?),
+            130 => Entity::OffsetCurve(OffsetCurve::decode(&mut d)?),
+            140 => Entity::OffsetSurface(OffsetSurface::decode(&mut d)?),
             141 => Entity::Boundary(Boundary::decode(&mut d)?),
             142 => Entity::CurveOnSurface(CurveOnSurface::decode(&mut d)?),
             143 => Entity::BoundedSurface(BoundedSurface::decode(&mut d)?),
             144 => Entity::TrimmedSurface(TrimmedSurface::decode(&mut d)?),
             186 => Entity::ManifoldSolid(ManifoldSolid::decode(&mut d)?),
+            190 => Entity::PlaneSurface(PlaneSurface::decode(&mut d, form)?),
+            192 => Entity::CylindricalSurface(CylindricalSurface::decode(&mut d, form)?),
+            194 => Entity::ConicalSurface(ConicalSurface::decode(&mut d, form)?),
+            196 => Entity::SphericalSurface(SphericalSurface::decode(&mut d, form)?),
+            198 => Entity::ToroidalSurface(ToroidalSurface::decode(&mut d, form)?),
             314 => Entity::ColorDefinition(ColorDefinition::decode(&mut d)?),
             502 => Entity::VertexList(VertexList::decode(&mut d)?),
             504 => Entity::EdgeList(EdgeList::decode(&mut d)?),
@@ -132,7 +170,6 @@ impl Entity {
                 ));
             }
         };
-        let _ = form;
         Ok((e, d.rest()))
     }
 
@@ -143,6 +180,8 @@ impl Entity {
             Entity::CircularArc(x) => x.encode(&mut e),
             Entity::CompositeCurve(x) => x.encode(&mut e),
             Entity::ConicArc(x) => x.encode(&mut e),
+            Entity::CopiousData(x) => x.encode(&mut e)?,
+            Entity::Plane(x) => x.encode(&mut e),
             Entity::Line(x) => x.encode(&mut e),
             Entity::SplineCurve(x) => x.encode(&mut e)?,
             Entity::SplineSurface(x) => x.encode(&mut e)?,
@@ -150,14 +189,22 @@ impl Entity {
             Entity::RuledSurface(x) => x.encode(&mut e),
             Entity::SurfaceOfRevolution(x) => x.encode(&mut e),
             Entity::TabulatedCylinder(x) => x.encode(&mut e),
+            Entity::Direction(x) => x.encode(&mut e),
             Entity::TransformationMatrix(x) => x.encode(&mut e),
             Entity::BSplineCurve(x) => x.encode(&mut e)?,
             Entity::BSplineSurface(x) => x.encode(&mut e)?,
+            Entity::OffsetCurve(x) => x.encode(&mut e),
+            Entity::OffsetSurface(x) => x.encode(&mut e),
             Entity::Boundary(x) => x.encode(&mut e),
             Entity::CurveOnSurface(x) => x.encode(&mut e),
             Entity::BoundedSurface(x) => x.encode(&mut e),
             Entity::TrimmedSurface(x) => x.encode(&mut e),
             Entity::ManifoldSolid(x) => x.encode(&mut e),
+            Entity::PlaneSurface(x) => x.encode(&mut e),
+            Entity::CylindricalSurface(x) => x.encode(&mut e),
+            Entity::ConicalSurface(x) => x.encode(&mut e),
+            Entity::SphericalSurface(x) => x.encode(&mut e),
+            Entity::ToroidalSurface(x) => x.encode(&mut e),
             Entity::ColorDefinition(x) => x.encode(&mut e)?,
             Entity::VertexList(x) => x.encode(&mut e),
             Entity::EdgeList(x) => x.encode(&mut e),
@@ -176,6 +223,8 @@ impl Entity {
             Entity::CircularArc(_) => 100,
             Entity::CompositeCurve(_) => 102,
             Entity::ConicArc(_) => 104,
+            Entity::CopiousData(_) => 106,
+            Entity::Plane(_) => 108,
             Entity::Line(_) => 110,
             Entity::SplineCurve(_) => 112,
             Entity::SplineSurface(_) => 114,
@@ -183,14 +232,22 @@ impl Entity {
             Entity::RuledSurface(_) => 118,
             Entity::SurfaceOfRevolution(_) => 120,
             Entity::TabulatedCylinder(_) => 122,
+            Entity::Direction(_) => 123,
             Entity::TransformationMatrix(_) => 124,
             Entity::BSplineCurve(_) => 126,
             Entity::BSplineSurface(_) => 128,
+            Entity::OffsetCurve(_) => 130,
+            Entity::OffsetSurface(_) => 140,
             Entity::Boundary(_) => 141,
             Entity::CurveOnSurface(_) => 142,
             Entity::BoundedSurface(_) => 143,
             Entity::TrimmedSurface(_) => 144,
             Entity::ManifoldSolid(_) => 186,
+            Entity::PlaneSurface(_) => 190,
+            Entity::CylindricalSurface(_) => 192,
+            Entity::ConicalSurface(_) => 194,
+            Entity::SphericalSurface(_) => 196,
+            Entity::ToroidalSurface(_) => 198,
             Entity::ColorDefinition(_) => 314,
             Entity::VertexList(_) => 502,
             Entity::EdgeList(_) => 504,
@@ -214,6 +271,33 @@ impl Entity {
                 [x.axis, x.generatrix].into_iter().for_each(&mut push)
             }
             Entity::TabulatedCylinder(x) => push(x.directrix),
+            Entity::Plane(x) => x.boundary.into_iter().for_each(&mut push),
+            Entity::OffsetCurve(x) => {
+                push(x.base);
+                x.function.into_iter().for_each(&mut push);
+            }
+            Entity::OffsetSurface(x) => push(x.surface),
+            Entity::PlaneSurface(x) => {
+                [x.location, x.normal].into_iter().for_each(&mut push);
+                x.refdir.into_iter().for_each(&mut push);
+            }
+            Entity::CylindricalSurface(x) => {
+                [x.location, x.axis].into_iter().for_each(&mut push);
+                x.refdir.into_iter().for_each(&mut push);
+            }
+            Entity::ConicalSurface(x) => {
+                [x.location, x.axis].into_iter().for_each(&mut push);
+                x.refdir.into_iter().for_each(&mut push);
+            }
+            Entity::SphericalSurface(x) => {
+                push(x.center);
+                x.axis.into_iter().for_each(&mut push);
+                x.refdir.into_iter().for_each(&mut push);
+            }
+            Entity::ToroidalSurface(x) => {
+                [x.center, x.axis].into_iter().for_each(&mut push);
+                x.refdir.into_iter().for_each(&mut push);
+            }
             Entity::Boundary(x) => {
                 push(x.surface);
                 for c in &x.curves {

@@ -1,4 +1,5 @@
-//! Other entities: 116 point, 124 transformation matrix, 314 colour definition.
+//! Other entities: 116 point, 123 direction, 124 transformation matrix, 314 colour
+//! definition.
 
 use super::{Dec, Enc, write_err};
 use crate::directory::DeId;
@@ -118,5 +119,23 @@ impl ColorDefinition {
             None => e.0.push(crate::param::Param::Empty),
         }
         Ok(())
+    }
+}
+
+/// 123 direction (not necessarily of unit length).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Direction {
+    /// (X, Y, Z).
+    pub direction: [f64; 3],
+}
+
+impl Direction {
+    pub(crate) fn decode(d: &mut Dec) -> Result<Self, EntityProblem> {
+        Ok(Direction {
+            direction: d.reals("direction")?,
+        })
+    }
+    pub(crate) fn encode(&self, e: &mut Enc) {
+        e.reals(&self.direction);
     }
 }

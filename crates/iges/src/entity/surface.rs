@@ -1,5 +1,6 @@
-//! Surface entities: 114 parametric spline surface, 118 ruled surface, 120 surface of
-//! revolution, 122 tabulated cylinder, 128 rational B-spline surface.
+//! Surface entities: 108 plane, 114 parametric spline surface, 118 ruled surface, 120
+//! surface of revolution, 122 tabulated cylinder, 128 rational B-spline surface, 140 offset
+//! surface.
 
 use super::{Dec, Enc, write_err};
 use crate::directory::DeId;
@@ -326,5 +327,63 @@ impl BSplineSurface {
         e.reals(&self.u_range);
         e.reals(&self.v_range);
         Ok(())
+    }
+}
+
+/// 108 plane A x + B y + C z = D; form 0 unbounded, form 1 bounded by the closed curve
+/// `boundary`, form −1 a hole bounded by it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plane {
+    /// A, B, C, D.
+    pub coefficients: [f64; 4],
+    /// PTR: the closed bounding curve (forms ±1), `None` when unbounded.
+    pub boundary: Option<DeId>,
+    /// (X, Y, Z): where the display symbol is drawn.
+    pub symbol_location: [f64; 3],
+    /// SIZE: display symbol size.
+    pub symbol_size: f64,
+}
+
+impl Plane {
+    pub(crate) fn decode(d: &mut Dec) -> Result<Self, EntityProblem> {
+        Ok(Plane {
+            coefficients: d.reals("plane coefficient")?,
+            boundary: d.opt_ptr("bounding curve")?,
+            symbol_location: d.reals("display symbol location")?,
+            symbol_size: d.real("display symbol size")?,
+        })
+    }
+    pub(crate) fn encode(&self, e: &mut Enc) {
+        e.reals(&self.coefficients);
+        e.opt_ptr(self.boundary);
+        e.reals(&self.symbol_location);
+        e.real(self.symbol_size);
+    }
+}
+
+/// 140 offset surface: O(u, v) = S(u, v) + d N(u, v), N the unit normal of the surface
+/// `surface`; `indicator` is a vector on the side of the offset.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffsetSurface {
+    /// (NX, NY, NZ): offset indicator.
+    pub indicator: [f64; 3],
+    /// D: offset distance.
+    pub distance: f64,
+    /// DE: the surface offset.
+    pub surface: DeId,
+}
+
+impl OffsetSurface {
+    pub(crate) fn decode(d: &mut Dec) -> Result<Self, EntityProblem> {
+        Ok(OffsetSurface {
+            indicator: d.reals("offset indicator")?,
+            distance: d.real("offset distance")?,
+            surface: d.ptr("surface")?,
+        })
+    }
+    pub(crate) fn encode(&self, e: &mut Enc) {
+        e.reals(&self.indicator);
+        e.real(self.distance);
+        e.ptr(self.surface);
     }
 }

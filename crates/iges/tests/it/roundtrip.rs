@@ -36,7 +36,7 @@ impl Pool {
 }
 
 fn make(kind: u8, p: &mut Pool, n: usize) -> Entity {
-    match kind % 16 {
+    match kind % 27 {
         0 => Entity::Line(Line {
             start: p.reals(),
             end: p.reals(),
@@ -170,6 +170,89 @@ fn make(kind: u8, p: &mut Pool, n: usize) -> Entity {
             outer_loop_first: p.flag(),
             loops: (0..p.small(0, 3)).map(|_| p.ptr(n)).collect(),
         }),
+        16 => {
+            let ip = p.small(1, 3) as i64;
+            let m = p.small(0, 4);
+            let z = if ip == 1 { p.real() } else { 0.0 };
+            let points = (0..m)
+                .map(|_| {
+                    let q: [f64; 3] = p.reals();
+                    if ip == 1 { [q[0], q[1], z] } else { q }
+                })
+                .collect();
+            let vectors = if ip == 3 {
+                (0..m).map(|_| p.reals()).collect()
+            } else {
+                Vec::new()
+            };
+            Entity::CopiousData(CopiousData {
+                ip,
+                z,
+                points,
+                vectors,
+            })
+        }
+        17 => Entity::Plane(Plane {
+            coefficients: p.reals(),
+            boundary: p.flag().then(|| p.ptr(n)),
+            symbol_location: p.reals(),
+            symbol_size: p.real(),
+        }),
+        18 => Entity::Direction(Direction {
+            direction: p.reals(),
+        }),
+        19 => Entity::OffsetCurve(OffsetCurve {
+            base: p.ptr(n),
+            flag: p.small(1, 3) as i64,
+            function: p.flag().then(|| p.ptr(n)),
+            function_coordinate: p.small(0, 3) as i64,
+            taper: p.small(0, 2) as i64,
+            d1: p.real(),
+            td1: p.real(),
+            d2: p.real(),
+            td2: p.real(),
+            normal: p.reals(),
+            range: p.reals(),
+        }),
+        20 => Entity::OffsetSurface(OffsetSurface {
+            indicator: p.reals(),
+            distance: p.real(),
+            surface: p.ptr(n),
+        }),
+        21 => Entity::PlaneSurface(PlaneSurface {
+            location: p.ptr(n),
+            normal: p.ptr(n),
+            refdir: p.flag().then(|| p.ptr(n)),
+        }),
+        22 => Entity::CylindricalSurface(CylindricalSurface {
+            location: p.ptr(n),
+            axis: p.ptr(n),
+            radius: p.real(),
+            refdir: p.flag().then(|| p.ptr(n)),
+        }),
+        23 => Entity::ConicalSurface(ConicalSurface {
+            location: p.ptr(n),
+            axis: p.ptr(n),
+            radius: p.real(),
+            semi_angle: p.real(),
+            refdir: p.flag().then(|| p.ptr(n)),
+        }),
+        24 => {
+            let form1 = p.flag();
+            Entity::SphericalSurface(SphericalSurface {
+                center: p.ptr(n),
+                radius: p.real(),
+                axis: form1.then(|| p.ptr(n)),
+                refdir: form1.then(|| p.ptr(n)),
+            })
+        }
+        25 => Entity::ToroidalSurface(ToroidalSurface {
+            center: p.ptr(n),
+            axis: p.ptr(n),
+            major: p.real(),
+            minor: p.real(),
+            refdir: p.flag().then(|| p.ptr(n)),
+        }),
         _ => Entity::ConicArc(ConicArc {
             coefficients: p.reals(),
             z: p.real(),
@@ -214,7 +297,18 @@ proptest! {
         for &k in &kinds[1..] {
             let e = make(k, &mut p, n);
             let transform = p.flag().then_some(DeId::from_index(0));
-            let id = f.push_with(e, p.small(0, 2) as i32, transform);
+            // The analytic surfaces carry a reference direction exactly in form 1.
+            let form = match &e {
+                Entity::PlaneSurface(PlaneSurface { refdir, .. })
+                | Entity::CylindricalSurface(CylindricalSurface { refdir, .. })
+                | Entity::ConicalSurface(ConicalSurface { refdir, .. })
+                | Entity::SphericalSurface(SphericalSurface { refdir, .. })
+                | Entity::ToroidalSurface(ToroidalSurface { refdir, .. }) => {
+                    refdir.is_some() as i32
+                }
+                _ => p.small(0, 2) as i32,
+            };
+            let id = f.push_with(e, form, transform);
             f.entities[id.index()].de.label = label.trim().to_string();
             f.entities[id.index()].de.color = p.small(0, 8) as i64;
         }

@@ -320,8 +320,154 @@ fn brep() {
         panic!()
     };
     assert_eq!((m.shell, m.shell_agrees, m.voids.len()), (id(17), true, 0));
-    // 108 (plane) is not supported: kept raw with a warning.
-    assert_eq!(f.warnings.len(), 1);
+    let Entity::Plane(p) = &f.get(id(13)).unwrap().entity else {
+        panic!()
+    };
+    assert_eq!((p.coefficients, p.boundary), ([0.0, 0.0, 1.0, 0.0], None));
+    assert!(f.warnings.is_empty());
+}
+
+fn snip_form(ty: i32, form: i32, params: &str) -> Snip<'_> {
+    Snip {
+        ty,
+        form,
+        transform: 0,
+        params,
+    }
+}
+
+/// The analytic surfaces 190–198 as OpenCASCADE writes them (form 1, parameters copied
+/// from its B-rep output), and a form-0 sphere without axis.
+#[test]
+fn analytic_surfaces() {
+    let f = read(&[
+        snip(116, "116,0.,0.,2.,0;"),
+        snip(123, "123,0.,0.,1.;"),
+        snip(123, "123,1.,0.,-0.;"),
+        snip_form(190, 1, "190,1,3,5;"),
+        snip_form(192, 1, "192,1,3,1.5,5;"),
+        snip_form(194, 1, "194,1,3,3.,26.565051177,5;"),
+        snip_form(196, 1, "196,1,2.5,3,5;"),
+        snip_form(198, 1, "198,1,3,3.,0.5,5;"),
+        snip(196, "196,1,4.;"),
+        snip(192, "192,1,3,2.;"),
+    ]);
+    let get = |k: u32| &f.get(id(k)).unwrap().entity;
+    let Entity::Point(p) = get(1) else { panic!() };
+    assert_eq!(p.point, [0.0, 0.0, 2.0]);
+    let Entity::Direction(d) = get(5) else {
+        panic!()
+    };
+    assert_eq!(d.direction, [1.0, 0.0, -0.0]);
+    let Entity::PlaneSurface(s) = get(7) else {
+        panic!()
+    };
+    assert_eq!(
+        (s.location, s.normal, s.refdir),
+        (id(1), id(3), Some(id(5)))
+    );
+    let Entity::CylindricalSurface(s) = get(9) else {
+        panic!()
+    };
+    assert_eq!(
+        (s.location, s.axis, s.radius, s.refdir),
+        (id(1), id(3), 1.5, Some(id(5)))
+    );
+    let Entity::ConicalSurface(s) = get(11) else {
+        panic!()
+    };
+    assert_eq!(
+        (s.location, s.axis, s.radius, s.semi_angle, s.refdir),
+        (id(1), id(3), 3.0, 26.565051177, Some(id(5)))
+    );
+    let Entity::SphericalSurface(s) = get(13) else {
+        panic!()
+    };
+    assert_eq!(
+        (s.center, s.radius, s.axis, s.refdir),
+        (id(1), 2.5, Some(id(3)), Some(id(5)))
+    );
+    let Entity::ToroidalSurface(s) = get(15) else {
+        panic!()
+    };
+    assert_eq!(
+        (s.center, s.axis, s.major, s.minor, s.refdir),
+        (id(1), id(3), 3.0, 0.5, Some(id(5)))
+    );
+    let Entity::SphericalSurface(s) = get(17) else {
+        panic!()
+    };
+    assert_eq!(
+        (s.center, s.radius, s.axis, s.refdir),
+        (id(1), 4.0, None, None)
+    );
+    let Entity::CylindricalSurface(s) = get(19) else {
+        panic!()
+    };
+    assert_eq!((s.radius, s.refdir), (2.0, None));
+    assert!(f.warnings.is_empty());
+    // Every pointer is listed.
+    assert_eq!(get(15).pointers(), vec![id(1), id(3), id(5)]);
+}
+
+/// 106 in its three layouts, 108 bounded, 130 and 140.
+#[test]
+fn copious_data_plane_and_offsets() {
+    let f = read(&[
+        snip_form(106, 11, "106,1,3,0.5,0.,0.,1.,0.,1.,1.;"),
+        snip_form(106, 12, "106,2,2,0.,0.,0.,1.,2.,3.;"),
+        snip_form(106, 13, "106,3,2,0.,0.,0.,0.,0.,1.,1.,2.,3.,1.,0.,0.;"),
+        snip_form(108, 1, "108,0.,0.,1.,0.5,1,0.,0.,0.5,1.;"),
+        snip(130, "130,1,1,0,0,0,0.25,0.,0.,0.,0.,0.,1.,0.,1.;"),
+        snip(140, "140,0.,0.,1.,0.1,7;"),
+    ]);
+    let get = |k: u32| &f.get(id(k)).unwrap().entity;
+    let Entity::CopiousData(c) = get(1) else {
+        panic!()
+    };
+    assert_eq!((c.ip, c.z), (1, 0.5));
+    assert_eq!(
+        c.points,
+        vec![[0.0, 0.0, 0.5], [1.0, 0.0, 0.5], [1.0, 1.0, 0.5]]
+    );
+    let Entity::CopiousData(c) = get(3) else {
+        panic!()
+    };
+    assert_eq!(c.points, vec![[0.0; 3], [1.0, 2.0, 3.0]]);
+    let Entity::CopiousData(c) = get(5) else {
+        panic!()
+    };
+    assert_eq!(c.points, vec![[0.0; 3], [1.0, 2.0, 3.0]]);
+    assert_eq!(c.vectors, vec![[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]);
+    let Entity::Plane(p) = get(7) else { panic!() };
+    assert_eq!(
+        (p.coefficients, p.boundary, p.symbol_size),
+        ([0.0, 0.0, 1.0, 0.5], Some(id(1)), 1.0)
+    );
+    let Entity::OffsetCurve(o) = get(9) else {
+        panic!()
+    };
+    assert_eq!(
+        (o.base, o.flag, o.function, o.d1, o.normal, o.range),
+        (id(1), 1, None, 0.25, [0.0, 0.0, 1.0], [0.0, 1.0])
+    );
+    let Entity::OffsetSurface(o) = get(11) else {
+        panic!()
+    };
+    assert_eq!(
+        (o.indicator, o.distance, o.surface),
+        ([0.0, 0.0, 1.0], 0.1, id(7))
+    );
+    assert!(f.warnings.is_empty());
+    // An interpretation flag out of range names its parameter.
+    let text = crate::build(&[snip(106, "106,4,1,0.;")]);
+    let e = iges::read(text.as_bytes(), "c.igs")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "c.igs: entity at D line 1 (type 106): parameter 1: expected 1, 2 or 3 (IP), found '4'"
+    );
 }
 
 #[test]
