@@ -12,8 +12,9 @@ use std::time::SystemTime;
 use serde_json::Value;
 
 /// The crates with a `[[bench]]` target named after the crate, in layer order.
-const BENCHED: [&str; 9] = [
+const BENCHED: [&str; 10] = [
     "iges",
+    "step",
     "geom-db",
     "mesh",
     "intersect",

@@ -9,6 +9,7 @@ use std::path::Path;
 /// on crates that come before it. `testkit` may be a dev-dependency of anyone.
 pub const LAYERS: &[&str] = &[
     "iges",
+    "step",
     "geom-db",
     "mesh",
     "intersect",
