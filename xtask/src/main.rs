@@ -62,12 +62,13 @@ pub fn cargo(args: &[&str]) -> Result<(), String> {
     }
 }
 
-/// Runs the `aeroshape` program (or its example `example`) in the release profile with the
-/// arguments `args`.
+/// Runs the `aeroshape` program (crate `aeroshape-cli`), or the example `example` of the
+/// library `aeroshape`, in the release profile with the arguments `args`.
 pub fn aeroshape(example: Option<&str>, args: &[&str]) -> Result<(), String> {
-    let mut a = vec!["run", "--release", "-q", "-p", "aeroshape"];
-    if let Some(e) = example {
-        a.extend(["--example", e]);
+    let mut a = vec!["run", "--release", "-q"];
+    match example {
+        Some(e) => a.extend(["-p", "aeroshape", "--example", e]),
+        None => a.extend(["-p", "aeroshape-cli", "--bin", "aeroshape"]),
     }
     a.push("--");
     a.extend_from_slice(args);

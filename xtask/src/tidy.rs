@@ -18,6 +18,7 @@ pub const LAYERS: &[&str] = &[
     "deform",
     "wingmaster",
     "aeroshape",
+    "aeroshape-cli",
     "xtask",
 ];
 

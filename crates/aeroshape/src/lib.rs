@@ -1,11 +1,12 @@
-//! The aeroshape pipeline as a library (paper Figure 5) and the support code of the
-//! `aeroshape` command-line program.
+//! The aeroshape pipeline as a library (paper Figure 5): [`Study`] (built once from a case,
+//! then evaluated for as many design vectors as an optimiser needs), the case file
+//! ([`case`]) and atomic output ([`fsio`]).
 //!
-//! Layer: the bottom; depends on every other crate.
+//! Layer: the bottom; depends on every other crate. No command line or plotting
+//! dependency: the `aeroshape` program and its pictures are the crate `aeroshape-cli`.
 
 pub mod case;
 pub mod fsio;
-pub mod plot;
 pub mod study;
 
 pub use study::{Evaluation, Study};

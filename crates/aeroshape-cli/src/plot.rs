@@ -3,7 +3,7 @@
 //! ratio, drawn with `plotters` and the embedded DejaVu Sans font.
 //!
 //! ```no_run
-//! use aeroshape::plot::{Plot, Series};
+//! use crate::plot::{Plot, Series};
 //! let mut p = Plot::new("NACA 0012").labels("x / c", "z / c").equal_aspect(true);
 //! p.push(Series::line("fit", vec![(0.0, 0.0), (1.0, 0.0)]));
 //! p.write_png(std::path::Path::new("fit.png")).unwrap();
@@ -124,8 +124,6 @@ pub struct Plot {
     pub equal_aspect: bool,
     /// Image size in pixels.
     pub size: (u32, u32),
-    /// Fixed axis ranges ((x0, x1), (y0, y1)); `None` fits the data.
-    pub range: Option<((f64, f64), (f64, f64))>,
 }
 
 const PALETTE: [(u8, u8, u8); 8] = [
@@ -149,7 +147,6 @@ impl Plot {
             series: Vec::new(),
             equal_aspect: false,
             size: (1200, 700),
-            range: None,
         }
     }
 
@@ -169,12 +166,6 @@ impl Plot {
     /// Sets the image size in pixels.
     pub fn size(mut self, w: u32, h: u32) -> Self {
         self.size = (w, h);
-        self
-    }
-
-    /// Fixes the axis ranges.
-    pub fn range(mut self, x: (f64, f64), y: (f64, f64)) -> Self {
-        self.range = Some((x, y));
         self
     }
 
@@ -213,7 +204,7 @@ impl Plot {
 
     fn draw(&self, root: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>) -> Result<()> {
         let (w, h) = root.dim_in_pixel();
-        let ((mut x0, mut x1), (mut y0, mut y1)) = self.range.unwrap_or_else(|| self.data_range());
+        let ((mut x0, mut x1), (mut y0, mut y1)) = self.data_range();
         let (label_x, label_y, margin, caption) = (50u32, 80u32, 20u32, 40u32);
         if self.equal_aspect {
             let pw = (w.saturating_sub(label_y + 2 * margin)).max(1) as f64;
@@ -314,7 +305,7 @@ impl Plot {
 pub fn write_stack(path: &Path, plots: &[Plot]) -> Result<()> {
     register_font();
     anyhow::ensure!(!plots.is_empty(), "{}: nothing to plot", path.display());
-    let tmp = crate::fsio::temp_beside(path)
+    let tmp = aeroshape::fsio::temp_beside(path)
         .with_context(|| format!("{}: cannot create a temporary file", path.display()))?;
     let w = plots.iter().map(|p| p.size.0).max().unwrap_or(800);
     let h: u32 = plots.iter().map(|p| p.size.1).sum();

@@ -202,7 +202,7 @@ fn pictures(
 ) -> anyhow::Result<()> {
     let out = |name: &str| dir.join(name);
     let wings = wing_surfaces(study.geometry());
-    aeroshape::plot::quality_histogram(
+    crate::plot::quality_histogram(
         &out("quality.png"),
         study.baseline_quality(),
         &ev.cell_quality,
@@ -211,17 +211,12 @@ fn pictures(
     .map_err(anyhow::Error::msg)?;
     written.push(out("quality.png").display().to_string());
     if !wings.is_empty() {
-        aeroshape::plot::wing_planform(
-            &out("planform.png"),
-            study.geometry(),
-            &ev.geometry,
-            &wings,
-        )
-        .map_err(anyhow::Error::msg)?;
+        crate::plot::wing_planform(&out("planform.png"), study.geometry(), &ev.geometry, &wings)
+            .map_err(anyhow::Error::msg)?;
         written.push(out("planform.png").display().to_string());
         let (lo, hi) = span_range(study.geometry(), &wings);
         let stations = [lo + 0.2 * (hi - lo), 0.5 * (lo + hi), hi - 0.02 * (hi - lo)];
-        aeroshape::plot::wing_sections(
+        crate::plot::wing_sections(
             &out("sections.png"),
             study.geometry(),
             &ev.geometry,

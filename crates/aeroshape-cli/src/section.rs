@@ -8,8 +8,8 @@ use anyhow::Context;
 use clap::{Args, Subcommand};
 use wingmaster::{Airfoil, FitOptions, SectionFit, SectionParams, fit};
 
+use crate::plot::{Mark, Plot, Series, write_stack};
 use aeroshape::fsio::{ensure_not_input, write_atomic};
-use aeroshape::plot::{Mark, Plot, Series, write_stack};
 
 /// Wing-section commands.
 #[derive(Debug, Subcommand)]

@@ -1,17 +1,25 @@
-//! Command-line parsing and dispatch. Each subcommand family lives in its own module.
+//! The `aeroshape` command-line program: parsing and dispatch (each subcommand family lives
+//! in its own module) and the pictures ([`plot`]). See `docs/cli.md` for the contract: exit
+//! status 0 on success, 1 on a user error (one line on stderr naming the file, line or
+//! entity), 2 on a usage error.
+//!
+//! This is the only crate that knows about clap, indicatif and plotters: the pipeline itself
+//! is the library `aeroshape` (`Study`, case files, atomic output), which an MDO framework
+//! embeds without compiling a command line or a plotting stack.
 
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-pub mod deform;
-pub mod geom;
-pub mod geom_import;
-pub mod mesh;
-pub mod param;
-pub mod run;
-pub mod section;
-pub mod surfgrid;
+mod deform;
+mod geom;
+mod geom_import;
+mod mesh;
+mod param;
+mod plot;
+mod run;
+mod section;
+mod surfgrid;
 
 /// CAD-linked shape parametrisation and grid update for aerodynamic shape optimisation.
 #[derive(Debug, Parser)]
@@ -48,7 +56,7 @@ enum Command {
 }
 
 /// Runs the program and maps the outcome to the exit status of the CLI contract.
-pub fn main() -> ExitCode {
+fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

@@ -1,0 +1,9 @@
+//! The `aeroshape` program end to end, one module per subcommand family (one integration
+//! binary for the crate, to keep link time down).
+
+mod deform;
+mod geom;
+mod mesh;
+mod param;
+mod section;
+mod surfgrid;
