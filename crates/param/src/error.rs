@@ -134,14 +134,25 @@ pub enum Error {
         source_name: String,
     },
 
-    /// A master source produced an unusable grid (wrong node count, non-finite point) or
-    /// failed.
+    /// A master source produced an unusable grid (wrong node count, non-finite point), or
+    /// the built-in station master could not be bound.
     #[error("modifier '{modifier}': master: {reason}")]
     Master {
         /// The modifier.
         modifier: String,
         /// What went wrong.
         reason: String,
+    },
+
+    /// A master source failed to generate its grid or its Jacobian; `source` is the source's
+    /// own typed error (e.g. `wingmaster::Error`, reached with `downcast_ref`).
+    #[error("modifier '{modifier}': master source: {source}")]
+    MasterSource {
+        /// The modifier.
+        modifier: String,
+        /// The source's error.
+        #[source]
+        source: crate::master::MasterError,
     },
 
     /// A design vector has the wrong length.

@@ -38,7 +38,7 @@ pub use basis::{Basis, Bump};
 pub use constraints::{ConstraintMatrix, LinearConstraint, Violation};
 pub use error::{Error, Result};
 pub use jacobian::Jacobian;
-pub use master::{MasterGrid, MasterSource, Station, StationsMaster};
+pub use master::{MasterError, MasterGrid, MasterSource, Station, StationsMaster};
 pub use modifier::{
     Axis, Decay, Direction, IsoLine, LineModifier, LineSupport, Links, MasterModifier, MasterSpec,
     Modifier, NodeModifier, Param, SurfaceForm, SurfaceModifier,

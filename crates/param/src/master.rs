@@ -55,6 +55,12 @@ impl MasterGrid {
     }
 }
 
+/// The error of a [`MasterSource`]: the implementing crate's own typed error (e.g.
+/// `wingmaster::Error`), boxed because `param` cannot name the error types of the crates
+/// above it. [`Error::MasterSource`](crate::Error::MasterSource) keeps it as its `source`;
+/// a caller reaches the typed error with `downcast_ref`.
+pub type MasterError = Box<dyn std::error::Error + Send + Sync + 'static>;
+
 /// A master generator (e.g. the wing master of `wingmaster`, §6.2).
 ///
 /// `generate(x)` returns the master for the modifier's design variables `x` (physical units,
@@ -65,9 +71,9 @@ pub trait MasterSource: Send + Sync {
     /// The names of the design variables, in the order `generate` takes them.
     fn variable_names(&self) -> Vec<String>;
     /// The master discretisation at `x`.
-    fn generate(&self, x: &[f64]) -> Result<MasterGrid, String>;
+    fn generate(&self, x: &[f64]) -> Result<MasterGrid, MasterError>;
     /// d(point k)/d(x_l) as `out[k][l]`, if the generator has it.
-    fn jacobian(&self, x: &[f64]) -> Option<Result<Vec<Vec<Vector3>>, String>> {
+    fn jacobian(&self, x: &[f64]) -> Option<Result<Vec<Vec<Vector3>>, MasterError>> {
         let _ = x;
         None
     }
@@ -474,13 +480,12 @@ impl MasterSource for StationsSource {
         self.names.clone()
     }
 
-    fn generate(&self, x: &[f64]) -> Result<MasterGrid, String> {
+    fn generate(&self, x: &[f64]) -> Result<MasterGrid, MasterError> {
         if x.len() != self.names.len() {
-            return Err(format!(
-                "{} values for {} variables",
-                x.len(),
-                self.names.len()
-            ));
+            return Err(Box::new(crate::Error::VectorLength {
+                expected: self.names.len(),
+                found: x.len(),
+            }));
         }
         Ok(MasterGrid {
             n_s: self.base.n_s,
@@ -491,7 +496,7 @@ impl MasterSource for StationsSource {
         })
     }
 
-    fn jacobian(&self, x: &[f64]) -> Option<Result<Vec<Vec<Vector3>>, String>> {
+    fn jacobian(&self, x: &[f64]) -> Option<Result<Vec<Vec<Vector3>>, MasterError>> {
         Some(Ok((0..self.base.points.len())
             .map(|k| {
                 let mut d = Vec::new();

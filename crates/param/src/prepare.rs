@@ -506,7 +506,10 @@ fn generate(
         modifier: name.to_string(),
         reason,
     };
-    let g = src.generate(x).map_err(&err)?;
+    let g = src.generate(x).map_err(|source| Error::MasterSource {
+        modifier: name.to_string(),
+        source,
+    })?;
     g.validate().map_err(&err)?;
     if g.n_s != base.n_s || g.n_t != base.n_t {
         return Err(err(format!(
@@ -532,7 +535,10 @@ fn master_jacobian(
         reason,
     };
     if let Some(j) = src.jacobian(x) {
-        let j = j.map_err(&err)?;
+        let j = j.map_err(|source| Error::MasterSource {
+            modifier: name.to_string(),
+            source,
+        })?;
         if j.len() != base.points.len() || j.iter().any(|r| r.len() != x.len()) {
             return Err(err("the source's Jacobian has the wrong size".into()));
         }
@@ -827,7 +833,10 @@ fn bind_master(
         modifier: name.clone(),
         reason,
     };
-    let base = source.generate(&x0).map_err(&err)?;
+    let base = source.generate(&x0).map_err(|source| Error::MasterSource {
+        modifier: name.clone(),
+        source,
+    })?;
     base.validate().map_err(&err)?;
     let pts: Vec<Point3> = nodes.iter().map(|&n| db.control_nodes[n]).collect();
     let locs = locate_on_master(&base, &pts);

@@ -74,6 +74,15 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// A key section of a wing master has invalid section parameters at the design vector.
+    #[error("key section {key}: {source}")]
+    KeySection {
+        /// The key section (index in the spec's `keys`).
+        key: usize,
+        /// Why its section is invalid (an [`Error::InvalidSection`]).
+        #[source]
+        source: Box<Error>,
+    },
     /// A B-spline basis could not be built.
     #[error(transparent)]
     Geom(#[from] geom_db::Error),

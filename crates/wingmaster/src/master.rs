@@ -671,7 +671,7 @@ impl WingMaster {
         ThicknessParams::from_vec(&v)
     }
 
-    fn key_deviation(&self, k: usize, dx: &[f64]) -> std::result::Result<KeyDeviation, String> {
+    fn key_deviation(&self, k: usize, dx: &[f64]) -> Result<KeyDeviation> {
         let key = &self.keys[k];
         let moved = key
             .thickness
@@ -682,7 +682,10 @@ impl WingMaster {
             return Ok(None);
         }
         let th = self.key_thickness(k, dx);
-        let poly = th.polygon().map_err(|e| format!("key section {k}: {e}"))?;
+        let poly = th.polygon().map_err(|e| Error::KeySection {
+            key: k,
+            source: Box::new(e),
+        })?;
         let dp: Vec<[f64; 2]> = poly
             .points()
             .iter()
@@ -737,19 +740,19 @@ impl WingMaster {
         (theta, dc, d)
     }
 
-    fn deviations(&self, x: &[f64]) -> std::result::Result<Vec<f64>, String> {
+    fn deviations(&self, x: &[f64]) -> Result<Vec<f64>> {
         if x.len() != self.names.len() {
-            return Err(format!(
+            return Err(err(format!(
                 "{} values for {} variables",
                 x.len(),
                 self.names.len()
-            ));
+            )));
         }
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-            return Err(format!(
+            return Err(err(format!(
                 "variable '{}' = {} is not finite",
                 self.names[i], x[i]
-            ));
+            )));
         }
         Ok(x.iter().zip(&self.x0).map(|(a, b)| a - b).collect())
     }
@@ -771,11 +774,11 @@ impl MasterSource for WingMaster {
         self.names.clone()
     }
 
-    fn generate(&self, x: &[f64]) -> std::result::Result<MasterGrid, String> {
+    fn generate(&self, x: &[f64]) -> std::result::Result<MasterGrid, param::MasterError> {
         let dx = self.deviations(x)?;
         let devs: Vec<KeyDeviation> = (0..self.keys.len())
             .map(|k| self.key_deviation(k, &dx))
-            .collect::<std::result::Result<_, _>>()?;
+            .collect::<Result<_>>()?;
         let n_s = self.base.n_s;
         let mut points = self.base.points.clone();
         for (j, st) in self.stations.iter().enumerate() {
@@ -805,8 +808,11 @@ impl MasterSource for WingMaster {
         })
     }
 
-    fn jacobian(&self, x: &[f64]) -> Option<std::result::Result<Vec<Vec<Vector3>>, String>> {
-        Some(self.exact_jacobian(x))
+    fn jacobian(
+        &self,
+        x: &[f64],
+    ) -> Option<std::result::Result<Vec<Vec<Vector3>>, param::MasterError>> {
+        Some(self.exact_jacobian(x).map_err(Into::into))
     }
 }
 
@@ -814,12 +820,12 @@ impl WingMaster {
     /// d(master point)/dx, exact: twist, chord, shift and planform terms by differentiation
     /// of the formula in the module doc; thickness through the analytic polygon Jacobian of
     /// conditions 1–6 and the linear Eq. (40); camber (linear) directly.
-    fn exact_jacobian(&self, x: &[f64]) -> std::result::Result<Vec<Vec<Vector3>>, String> {
+    fn exact_jacobian(&self, x: &[f64]) -> Result<Vec<Vec<Vector3>>> {
         let dx = self.deviations(x)?;
         let nv = x.len();
         let devs: Vec<KeyDeviation> = (0..self.keys.len())
             .map(|k| self.key_deviation(k, &dx))
-            .collect::<std::result::Result<_, _>>()?;
+            .collect::<Result<_>>()?;
         // Per key: (variable, d(deviation)/d(variable) per sample, key frame per unit chord).
         let mut ddev: Vec<Vec<(usize, Vec<[f64; 2]>)>> = Vec::with_capacity(self.keys.len());
         for (k, key) in self.keys.iter().enumerate() {
@@ -828,7 +834,10 @@ impl WingMaster {
                 let th = self.key_thickness(k, &dx);
                 let (_, jac) = th
                     .polygon_with_jacobian(true)
-                    .map_err(|e| format!("key section {k}: {e}"))?;
+                    .map_err(|e| Error::KeySection {
+                        key: k,
+                        source: Box::new(e),
+                    })?;
                 let dq0 = vec![[0.0, 0.0]; key.fit.params.camber.len()];
                 for &(pi, v) in &key.thickness {
                     let dp: Vec<[f64; 2]> = jac.iter().map(|row| row[pi]).collect();

@@ -31,7 +31,7 @@ impl MasterSource for CylMaster {
     fn variable_names(&self) -> Vec<String> {
         vec!["dz".into(), "dr".into()]
     }
-    fn generate(&self, x: &[f64]) -> Result<MasterGrid, String> {
+    fn generate(&self, x: &[f64]) -> Result<MasterGrid, param::MasterError> {
         let mut points = Vec::new();
         for j in 0..5 {
             for i in 0..41 {
@@ -44,7 +44,7 @@ impl MasterSource for CylMaster {
             points,
         })
     }
-    fn jacobian(&self, _x: &[f64]) -> Option<Result<Vec<Vec<Vector3>>, String>> {
+    fn jacobian(&self, _x: &[f64]) -> Option<Result<Vec<Vec<Vector3>>, param::MasterError>> {
         if !self.exact {
             return None;
         }
@@ -141,4 +141,48 @@ fn master_errors_name_the_modifier() {
     }
     let e = p.bind(&db, &sources(true)).err().unwrap();
     assert!(e.to_string().contains("modifier 'm'"), "{e}");
+}
+
+/// A master source whose generator fails beyond a height change of 0.2 with its own typed
+/// error (an `std::io::Error` of a known kind).
+struct FailingMaster;
+
+impl MasterSource for FailingMaster {
+    fn variable_names(&self) -> Vec<String> {
+        vec!["dz".into(), "dr".into()]
+    }
+    fn generate(&self, x: &[f64]) -> Result<MasterGrid, MasterError> {
+        if x[0] > 0.2 {
+            return Err(Box::new(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                "height change beyond 0.2",
+            )));
+        }
+        CylMaster { exact: true }.generate(x)
+    }
+}
+
+#[test]
+fn a_failing_master_source_keeps_its_typed_error() {
+    let db = fixture("cylinder");
+    let mut m = MasterSources::new();
+    m.insert(
+        "cyl".into(),
+        Arc::new(FailingMaster) as Arc<dyn MasterSource>,
+    );
+    let prep = master_param("cyl").bind(&db, &m).unwrap();
+    assert!(prep.apply(&[0.1, 0.0]).is_ok());
+    let e = prep.apply(&[0.3, 0.0]).unwrap_err();
+    let Error::MasterSource { modifier, source } = &e else {
+        panic!("{e:?}");
+    };
+    assert_eq!(modifier, "m");
+    let io = source
+        .downcast_ref::<std::io::Error>()
+        .expect("the source's own error type");
+    assert_eq!(io.kind(), std::io::ErrorKind::InvalidData);
+    // the chain reaches it through `Error::source` too
+    let via_chain = std::error::Error::source(&e).and_then(|s| s.downcast_ref::<std::io::Error>());
+    assert!(via_chain.is_some());
+    assert!(e.to_string().contains("height change beyond 0.2"), "{e}");
 }

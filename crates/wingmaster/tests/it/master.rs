@@ -389,7 +389,17 @@ fn spec_round_trip_and_errors() {
     // an invalid thickness at generate names the key section
     let wm = s.bind(&db, &n, &x0).unwrap();
     let e = wm.generate(&x_with(&[("tip_tmax", -0.5)])).unwrap_err();
-    assert!(e.contains("key section 1"), "{e}");
+    assert!(e.to_string().contains("key section 1"), "{e}");
+    // the typed error comes through the boxed `param::MasterError`
+    match e.downcast_ref::<wingmaster::Error>() {
+        Some(wingmaster::Error::KeySection { key: 1, source }) => {
+            assert!(
+                matches!(**source, wingmaster::Error::InvalidSection { .. }),
+                "{source:?}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
 }
 
 /// A wing lofted from a planform and two sections, then bound as a wing master: the key
