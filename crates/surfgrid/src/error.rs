@@ -98,6 +98,22 @@ pub enum Error {
         /// The marker name.
         marker: String,
     },
+    /// A wall marker named by the caller is not in the grid.
+    #[error("wall marker {marker:?} is not in the grid (markers: {})", available.join(", "))]
+    MissingMarker {
+        /// The marker name.
+        marker: String,
+        /// The grid's markers.
+        available: Vec<String>,
+    },
+    /// A wall marker has elements other than triangles.
+    #[error("wall marker {marker:?} has {kind:?} elements (triangles only)")]
+    WallElements {
+        /// The marker name.
+        marker: String,
+        /// The element kind found.
+        kind: mesh::ElementKind,
+    },
     /// The grid and the database do not match (different component count, bad node index).
     #[error("grid/database mismatch: {what}")]
     Mismatch {

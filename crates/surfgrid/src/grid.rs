@@ -199,6 +199,23 @@ impl SurfaceGrid {
         m.parametric = true;
         m
     }
+
+    /// Writes the parameters of this grid's nodes into the classification of a grid with the
+    /// same node numbering (e.g. the volume grid whose wall this grid is, after an update):
+    /// a node classified on a curve gets [t, 0], one on a surface (u, v), when its support
+    /// here is of the same dimension; other nodes, and grids without parametric
+    /// classification, are left as they are.
+    pub fn write_params(&self, grid: &mut Mesh) {
+        if let (Some(cls), true) = (grid.classes.as_mut(), grid.parametric) {
+            for (c, s) in cls.iter_mut().zip(&self.support) {
+                match *s {
+                    NodeSupport::Curve { t, .. } if c.dim == 1 => c.param = [t, 0.0],
+                    NodeSupport::Surface { uv, .. } if c.dim == 2 => c.param = uv,
+                    _ => {}
+                }
+            }
+        }
+    }
 }
 
 /// The marker name of a surface component: its name, or "component k" when it has none.

@@ -34,7 +34,7 @@ pub mod spacing;
 pub mod stats;
 pub mod update;
 
-pub use classify::{ClassifyOptions, ClassifyReport, classify};
+pub use classify::{ClassifyOptions, ClassifyReport, classify, classify_wall};
 pub use error::{Error, Result};
 pub use generate::{GenerateOptions, generate};
 pub use grid::{ComponentGrid, NodeSupport, PoleCopy, SurfaceGrid};
