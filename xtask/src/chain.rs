@@ -87,10 +87,10 @@ pub fn print_summary(r: &Value, out: &Path) {
     println!(
         "  deform       {:>8.3} s  {} iterations, residual {:.1e}, {} increment(s), {} sliding nodes",
         f(e, &["deform", "seconds"]),
-        e["deform"]["iterations"],
-        f(e, &["deform", "residual"]),
-        e["deform"]["increments"],
-        e["deform"]["sliding"]
+        e["deform"]["report"]["iterations"],
+        f(e, &["deform", "report", "residual"]),
+        e["deform"]["report"]["increments"],
+        e["deform"]["report"]["sliding"]
     );
     println!("  evaluation   {:>8.3} s", f(e, &["seconds"]));
     println!(

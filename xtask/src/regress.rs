@@ -95,7 +95,7 @@ const QUANTITIES: &[(&str, &[&str], Tol)] = &[
     ),
     (
         "deform iterations",
-        &["evaluation", "deform", "iterations"],
+        &["evaluation", "deform", "report", "iterations"],
         Tol::Close {
             rel: 0.25,
             abs: 2.0,
@@ -103,7 +103,7 @@ const QUANTITIES: &[(&str, &[&str], Tol)] = &[
     ),
     (
         "deform residual",
-        &["evaluation", "deform", "residual"],
+        &["evaluation", "deform", "report", "residual"],
         Tol::AtMost(1e-6),
     ),
     (

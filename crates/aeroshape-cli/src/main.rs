@@ -86,8 +86,39 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
-/// Flattens an error and its causes into a single line.
+/// Flattens an error and its causes into a single line. A cause whose message the line
+/// already holds is not repeated (the library errors show their typed source in their own
+/// message and also return it from `Error::source`).
 fn one_line(e: &anyhow::Error) -> String {
-    let s = format!("{e:#}");
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
+    let mut line = String::new();
+    for cause in e.chain() {
+        let msg = cause.to_string();
+        let msg = msg.split_whitespace().collect::<Vec<_>>().join(" ");
+        if msg.is_empty() || line.contains(&msg) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&msg);
+    }
+    line
+}
+
+#[cfg(test)]
+mod tests {
+    use super::one_line;
+
+    #[test]
+    fn one_line_joins_the_causes_without_repeating_them() {
+        let io = std::io::Error::other("no such file");
+        let e = anyhow::Error::new(io).context("geometry.ron:\n  cannot read");
+        assert_eq!(one_line(&e), "geometry.ron: cannot read: no such file");
+        // A library error whose message already holds its source's message.
+        let e = aeroshape::study::StudyError::Read {
+            path: "g.ron".into(),
+            source: std::io::Error::other("no such file"),
+        };
+        assert_eq!(one_line(&anyhow::Error::new(e)), "g.ron: no such file");
+    }
 }

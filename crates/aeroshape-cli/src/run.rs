@@ -170,8 +170,8 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         r.surface.seconds,
         r.surface.moved_nodes,
         r.deform.seconds,
-        r.deform.iterations,
-        r.deform.residual
+        r.deform.iterations(),
+        r.deform.report.as_ref().map_or(0.0, |d| d.residual)
     );
     println!(
         "quality min {:.4} → {:.4}, mean {:.4} → {:.4}, 1st percentile {:.4} → {:.4}, inverted {} → {}",

@@ -25,8 +25,8 @@ fn show(label: &str, seconds: f64, ev: &Evaluation) {
         r.model.seconds,
         r.surface.seconds,
         r.deform.seconds,
-        r.deform.iterations,
-        r.deform.rotation_iterations,
+        r.deform.iterations(),
+        r.deform.rotation_iterations(),
         r.quality_before.min,
         r.quality_after.min,
         r.quality_after.inverted
