@@ -1,5 +1,5 @@
 //! The `aeroshape` command-line program: parsing and dispatch (each subcommand family lives
-//! in its own module) and the pictures ([`plot`]). See `docs/cli.md` for the contract: exit
+//! in its own module) and the pictures ([`pictures`], drawn with [`plot`]). See `docs/cli.md` for the contract: exit
 //! status 0 on success, 1 on a user error (one line on stderr naming the file, line or
 //! entity), 2 on a usage error.
 //!
@@ -16,6 +16,7 @@ mod geom;
 mod geom_import;
 mod mesh;
 mod param;
+mod pictures;
 mod plot;
 mod run;
 mod section;

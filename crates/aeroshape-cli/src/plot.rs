@@ -13,9 +13,6 @@ use std::path::Path;
 use std::sync::Once;
 
 use anyhow::{Context, Result};
-use geom_db::eval::ParamSurface;
-use geom_db::prelude::Point3;
-use geom_db::{GeomDb, SupportSurface, SurfaceId};
 use plotters::prelude::*;
 
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
@@ -126,7 +123,8 @@ pub struct Plot {
     pub size: (u32, u32),
 }
 
-const PALETTE: [(u8, u8, u8); 8] = [
+/// The colours of series without their own, by series index.
+pub const PALETTE: [(u8, u8, u8); 8] = [
     (31, 119, 180),
     (214, 39, 40),
     (44, 160, 44),
@@ -228,10 +226,15 @@ impl Plot {
             .y_label_area_size(label_y)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let (x_span, y_span) = (x1 - x0, y1 - y0);
+        let x_tick = move |v: &f64| tick_label(*v, x_span);
+        let y_tick = move |v: &f64| tick_label(*v, y_span);
         chart
             .configure_mesh()
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
+            .x_label_formatter(&x_tick)
+            .y_label_formatter(&y_tick)
             .label_style(("sans-serif", 16))
             .axis_desc_style(("sans-serif", 18))
             .light_line_style(RGBColor(235, 235, 235))
@@ -281,8 +284,20 @@ impl Plot {
                         Mark::Points => {
                             Circle::new((x + 10, y), 4, color.stroke_width(1)).into_dyn()
                         }
-                        _ => PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
-                            .into_dyn(),
+                        Mark::Line => {
+                            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
+                                .into_dyn()
+                        }
+                        Mark::Dashed => plotters::element::DashedPathElement::new(
+                            vec![(x, y), (x + 22, y)],
+                            7,
+                            4,
+                            color.stroke_width(3),
+                        )
+                        .into_dyn(),
+                        Mark::LinePoints => {
+                            Cross::new((x + 10, y), 5, color.stroke_width(2)).into_dyn()
+                        }
                     });
             }
         }
@@ -298,6 +313,22 @@ impl Plot {
         }
         Ok(())
     }
+}
+
+/// The tick label of `v` on an axis spanning `span`: as many decimals as a tick spacing of
+/// about a tenth of the span needs, trailing zeros trimmed, and never "-0" (a tick at zero
+/// computed as −1e-17 is "0"); an axis of counts gets whole numbers.
+fn tick_label(v: f64, span: f64) -> String {
+    let step = (span.abs() / 10.0).max(f64::MIN_POSITIVE);
+    let decimals = (-step.log10()).ceil().clamp(0.0, 15.0) as usize;
+    let mut s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+    }
+    if s.trim_start_matches('-').chars().all(|c| c == '0') {
+        s = "0".to_string();
+    }
+    s
 }
 
 /// Draws several plots stacked vertically into one PNG (width: the widest plot; height: the
@@ -328,259 +359,21 @@ pub fn write_stack(path: &Path, plots: &[Plot]) -> Result<()> {
     Ok(())
 }
 
-/// Bins for [`quality_histogram`]: the mean-ratio quality lies in (−∞, 1], inverted cells
-/// (q ≤ 0) are counted in the first bin.
-const QUALITY_BINS: usize = 50;
-
-fn histogram_steps(q: &[f64]) -> Vec<(f64, f64)> {
-    let mut counts = [0usize; QUALITY_BINS];
-    for &x in q {
-        let k = ((x.clamp(0.0, 1.0) * QUALITY_BINS as f64) as usize).min(QUALITY_BINS - 1);
-        counts[k] += 1;
-    }
-    let w = 1.0 / QUALITY_BINS as f64;
-    let mut pts = vec![(0.0, 0.0)];
-    for (k, &c) in counts.iter().enumerate() {
-        let h = c as f64;
-        pts.push((k as f64 * w, h));
-        pts.push(((k + 1) as f64 * w, h));
-    }
-    pts.push((1.0, 0.0));
-    pts
-}
-
-/// Draws the distribution of cell quality (the mean ratio of DESIGN.md, one value per cell)
-/// before and after a deformation as two step histograms of 50 bins over [0, 1]; the title
-/// gets the minimum and the inverted count (q ≤ 0, counted in the first bin) of each.
-pub fn quality_histogram(path: &Path, before: &[f64], after: &[f64], title: &str) -> Result<()> {
-    let summary = |q: &[f64]| {
-        let min = q.iter().copied().fold(f64::INFINITY, f64::min);
-        let inverted = q.iter().filter(|&&x| x <= 0.0).count();
-        format!("min {min:.3}, {inverted} inverted")
-    };
-    let mut p = Plot::new(&format!(
-        "{title} — before: {}; after: {}",
-        summary(before),
-        summary(after)
-    ))
-    .labels("cell quality (mean ratio)", "cells");
-    p.push(Series::line("before", histogram_steps(before)).color(PALETTE[0]));
-    p.push(
-        Series::line("after", histogram_steps(after))
-            .color(PALETTE[1])
-            .mark(Mark::Dashed),
-    );
-    p.write_png(path)
-}
-
-/// Samples per parameter direction and per patch when drawing wing surfaces.
-const WING_SAMPLES: usize = 24;
-
-/// Points of the surfaces sampled on a regular grid of each patch.
-fn wing_samples(db: &GeomDb, surfaces: &[SurfaceId]) -> Result<Vec<Point3>> {
-    let mut pts = Vec::new();
-    for &id in surfaces {
-        let s = db.surfaces.get(id.index()).with_context(|| {
-            format!(
-                "{id} does not exist (the model has {} surfaces)",
-                db.surfaces.len()
-            )
-        })?;
-        let ([u0, u1], [v0, v1]) = s.domain();
-        let nu = WING_SAMPLES * s.n_u.max(1);
-        let nv = WING_SAMPLES * s.n_v.max(1);
-        for j in 0..=nv {
-            let v = v0 + (v1 - v0) * j as f64 / nv as f64;
-            for i in 0..=nu {
-                let u = u0 + (u1 - u0) * i as f64 / nu as f64;
-                pts.push(s.point(u, v));
-            }
-        }
-    }
-    Ok(pts)
-}
-
-/// The planform outline of sampled points: per spanwise station, the smallest and largest x
-/// (leading and trailing edges), as one closed polyline in the (y, x) plane. Stations are the
-/// clusters of points whose y values follow each other within 1e-6 of the span (a wing
-/// sampled along its spanwise parameter lines: one cluster per line, whatever the round-off);
-/// when that gives too many stations (sections not at constant y), the span is cut into
-/// `BINS` equal bins instead.
-fn planform_outline(pts: &[Point3]) -> Vec<(f64, f64)> {
-    const BINS: usize = 60;
-    const MAX_STATIONS: usize = 400;
-    let mut sorted: Vec<&Point3> = pts
-        .iter()
-        .filter(|p| p.x.is_finite() && p.y.is_finite())
-        .collect();
-    sorted.sort_by(|a, b| a.y.total_cmp(&b.y));
-    let (Some(first), Some(last)) = (sorted.first(), sorted.last()) else {
-        return Vec::new();
-    };
-    let (y0, y1) = (first.y, last.y);
-    if y1.partial_cmp(&y0) != Some(std::cmp::Ordering::Greater) {
-        return Vec::new();
-    }
-    let gap = 1e-6 * (y1 - y0);
-    let mut station = vec![0usize; sorted.len()];
-    for k in 1..sorted.len() {
-        station[k] = station[k - 1] + usize::from(sorted[k].y - sorted[k - 1].y > gap);
-    }
-    if station[sorted.len() - 1] + 1 > MAX_STATIONS {
-        for (k, p) in sorted.iter().enumerate() {
-            station[k] = (((p.y - y0) / (y1 - y0) * BINS as f64) as usize).min(BINS - 1);
-        }
-    }
-    // (y sum, count, min x, max x) per station, in increasing y.
-    let mut acc: Vec<(f64, usize, f64, f64)> = Vec::new();
-    let mut index = std::collections::BTreeMap::new();
-    for (p, &k) in sorted.iter().zip(&station) {
-        let i = *index.entry(k).or_insert_with(|| {
-            acc.push((0.0, 0, f64::INFINITY, f64::NEG_INFINITY));
-            acc.len() - 1
-        });
-        let a = &mut acc[i];
-        *a = (a.0 + p.y, a.1 + 1, a.2.min(p.x), a.3.max(p.x));
-    }
-    let y_of = |a: &(f64, usize, f64, f64)| a.0 / a.1 as f64;
-    let mut out: Vec<(f64, f64)> = acc.iter().map(|a| (y_of(a), a.2)).collect();
-    out.extend(acc.iter().rev().map(|a| (y_of(a), a.3)));
-    out.push(out[0]);
-    out
-}
-
-/// Draws the planform (top view: span y across, x down the chord) of the wing made of the
-/// support surfaces `wing_surfaces`, before and after a modification, with equal axes.
-pub fn wing_planform(
-    path: &Path,
-    before: &GeomDb,
-    after: &GeomDb,
-    wing_surfaces: &[SurfaceId],
-) -> Result<()> {
-    let mut p = Plot::new("Wing planform")
-        .labels("y (span)", "x (chord)")
-        .equal_aspect(true);
-    p.push(
-        Series::line(
-            "before",
-            planform_outline(&wing_samples(before, wing_surfaces)?),
-        )
-        .color(PALETTE[0]),
-    );
-    p.push(
-        Series::line(
-            "after",
-            planform_outline(&wing_samples(after, wing_surfaces)?),
-        )
-        .color(PALETTE[1])
-        .mark(Mark::Dashed),
-    );
-    p.write_png(path)
-}
-
-/// The section of a surface by the plane y = `y`: along the surface's spanwise parameter
-/// direction (the one along which y varies most at the domain centre), the first crossing of
-/// the plane on each line of the other parameter is refined by bisection; points are returned
-/// in order of the other parameter.
-fn surface_cut(s: &SupportSurface, y: f64) -> Vec<Point3> {
-    let ([u0, u1], [v0, v1]) = s.domain();
-    let (uc, vc) = (0.5 * (u0 + u1), 0.5 * (v0 + v1));
-    let d = s.derivs(uc, vc);
-    let span_is_v = (d.dv.y * (v1 - v0)).abs() >= (d.du.y * (u1 - u0)).abs();
-    // `along`: the chordwise parameter (one cut point per value); `across`: the spanwise one.
-    let at = |along: f64, across: f64| {
-        if span_is_v {
-            s.point(along, across)
-        } else {
-            s.point(across, along)
-        }
-    };
-    let ((a0, a1), (c0, c1)) = if span_is_v {
-        ((u0, u1), (v0, v1))
-    } else {
-        ((v0, v1), (u0, u1))
-    };
-    let n_along = WING_SAMPLES * 8 * if span_is_v { s.n_u } else { s.n_v }.max(1);
-    let n_across = WING_SAMPLES * if span_is_v { s.n_v } else { s.n_u }.max(1);
-    let mut out = Vec::new();
-    for i in 0..=n_along {
-        let a = a0 + (a1 - a0) * i as f64 / n_along as f64;
-        let f = |c: f64| at(a, c).y - y;
-        let mut prev = (c0, f(c0));
-        for j in 1..=n_across {
-            let c = c0 + (c1 - c0) * j as f64 / n_across as f64;
-            let fc = f(c);
-            if prev.1 == 0.0 || prev.1.signum() != fc.signum() {
-                let (mut lo, mut hi, mut flo) = (prev.0, c, prev.1);
-                for _ in 0..60 {
-                    let mid = 0.5 * (lo + hi);
-                    let fm = f(mid);
-                    if (fm <= 0.0) == (flo <= 0.0) {
-                        (lo, flo) = (mid, fm);
-                    } else {
-                        hi = mid;
-                    }
-                }
-                out.push(at(a, 0.5 * (lo + hi)));
-                break;
-            }
-            prev = (c, fc);
-        }
-    }
-    out
-}
-
-/// Draws the sections of the wing made of `wing_surfaces` by the planes y = `stations_y`,
-/// before and after a modification, one panel per station (x across, z up, equal axes).
-pub fn wing_sections(
-    path: &Path,
-    before: &GeomDb,
-    after: &GeomDb,
-    wing_surfaces: &[SurfaceId],
-    stations_y: &[f64],
-) -> Result<()> {
-    anyhow::ensure!(
-        !stations_y.is_empty(),
-        "{}: no section station given",
-        path.display()
-    );
-    let cut = |db: &GeomDb, y: f64| -> Result<Vec<Vec<(f64, f64)>>> {
-        wing_surfaces
-            .iter()
-            .map(|&id| {
-                let s = db.surfaces.get(id.index()).with_context(|| {
-                    format!(
-                        "{id} does not exist (the model has {} surfaces)",
-                        db.surfaces.len()
-                    )
-                })?;
-                Ok(surface_cut(s, y).iter().map(|p| (p.x, p.z)).collect())
-            })
-            .collect()
-    };
-    let mut plots = Vec::new();
-    for &y in stations_y {
-        let mut p = Plot::new(&format!("Section y = {y:.4}"))
-            .labels("x", "z")
-            .equal_aspect(true)
-            .size(1200, 450);
-        for (k, (db, label)) in [(before, "before"), (after, "after")]
-            .into_iter()
-            .enumerate()
-        {
-            for (j, pts) in cut(db, y)?.into_iter().enumerate() {
-                let s = Series::line(if j == 0 { label } else { "" }, pts).color(PALETTE[k]);
-                p.push(if k == 1 { s.mark(Mark::Dashed) } else { s });
-            }
-        }
-        plots.push(p);
-    }
-    write_stack(path, &plots)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tick_labels_have_the_decimals_of_the_spacing_and_no_negative_zero() {
+        assert_eq!(tick_label(1200.0, 1300.0), "1200");
+        assert_eq!(tick_label(-1e-17, 0.4), "0");
+        assert_eq!(tick_label(-0.0, 1.0), "0");
+        assert_eq!(tick_label(0.15, 0.35), "0.15");
+        assert_eq!(tick_label(0.1, 0.35), "0.1");
+        assert_eq!(tick_label(-0.00008, 2.2e-4), "-0.00008");
+        assert_eq!(tick_label(2.5, 7.0), "2.5");
+        assert_eq!(tick_label(3.0, 7.0), "3");
+    }
 
     #[test]
     fn writes_a_png() {
@@ -599,110 +392,5 @@ mod tests {
         let bytes = std::fs::read(&p).unwrap();
         assert_eq!(&bytes[1..4], b"PNG");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
-    }
-
-    fn wing_body() -> GeomDb {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../fixtures/geom/wing_body.ron"
-        );
-        let text = std::fs::read_to_string(path).unwrap();
-        GeomDb::from_ron_str(&text, path).unwrap()
-    }
-
-    #[test]
-    fn planform_outline_of_a_trapezoid_follows_its_edges() {
-        // Leading edge x = 0.5 y, trailing edge x = 2 + 0.2 y, y in [0, 3]; sampled on 301
-        // spanwise stations whose y carries round-off (±1e-12, as a real surface gives).
-        let (le, te) = (|y: f64| 0.5 * y, |y: f64| 2.0 + 0.2 * y);
-        let trapezoid = |y_at: &dyn Fn(usize, usize) -> f64| {
-            let mut pts = Vec::new();
-            for j in 0..=300 {
-                for i in 0..=20 {
-                    let y = y_at(j, i);
-                    let t = i as f64 / 20.0;
-                    pts.push(Point3::new(le(y) + t * (te(y) - le(y)), y, 0.0));
-                }
-            }
-            planform_outline(&pts)
-        };
-        let out = trapezoid(&|j, i| 0.01 * j as f64 + if i % 2 == 0 { 1e-12 } else { -1e-12 });
-        assert_eq!(out.len(), 2 * 301 + 1);
-        assert_eq!(out.first(), out.last());
-        for &(y, x) in &out[..301] {
-            assert!((x - le(y)).abs() < 1e-11, "LE at y={y}: {x}");
-        }
-        for &(y, x) in &out[301..602] {
-            assert!((x - te(y)).abs() < 1e-11, "TE at y={y}: {x}");
-        }
-        // Sections not at constant y (every point its own y): 60 equal bins instead, each
-        // edge within the bin's width times the edge's slope.
-        let out = trapezoid(&|j, i| (0.01 * j as f64 + 1e-4 * i as f64).min(3.0));
-        assert_eq!(out.len(), 2 * 60 + 1);
-        let n = 60;
-        for &(y, x) in &out[..n] {
-            assert!(
-                (x - le(y)).abs() < 0.5 * 3.0 / 60.0 + 1e-12,
-                "LE at y={y}: {x}"
-            );
-        }
-        for &(y, x) in &out[n..2 * n] {
-            assert!(
-                (x - te(y)).abs() < 0.2 * 3.0 / 60.0 + 1e-12,
-                "TE at y={y}: {x}"
-            );
-        }
-    }
-
-    #[test]
-    fn wing_cut_points_lie_in_the_plane_and_span_the_chord() {
-        let db = wing_body();
-        let wing = &db.surfaces[1];
-        let y = 0.5 * (wing.point(0.0, 0.0).y + wing.point(0.0, 1.0).y);
-        let cut = surface_cut(wing, y);
-        assert!(cut.len() > 100, "{} points", cut.len());
-        let scale = db.reference_length();
-        for p in &cut {
-            assert!((p.y - y).abs() < 1e-12 * scale, "{p:?} off y = {y}");
-        }
-        // The trailing edge (u = 0, v from root to tip) at this station, found independently
-        // by bisection on v, is the section's aftmost point.
-        let (mut lo, mut hi) = (0.0, 1.0);
-        for _ in 0..80 {
-            let mid = 0.5 * (lo + hi);
-            if wing.point(0.0, mid).y < y {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        let te = wing.point(0.0, lo).x;
-        let x1 = cut.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max);
-        assert!(
-            (x1 - te).abs() < 1e-9 * scale,
-            "aftmost {x1}, trailing edge {te}"
-        );
-    }
-
-    #[test]
-    fn pictures_are_written() {
-        let db = wing_body();
-        let dir = tempfile::tempdir().unwrap();
-        let ids = [SurfaceId(1)];
-        wing_planform(&dir.path().join("p.png"), &db, &db, &ids).unwrap();
-        wing_sections(&dir.path().join("s.png"), &db, &db, &ids, &[1.0, 3.0]).unwrap();
-        quality_histogram(
-            &dir.path().join("q.png"),
-            &[0.5, 0.7, -0.1],
-            &[0.6, 0.8],
-            "t",
-        )
-        .unwrap();
-        for f in ["p.png", "s.png", "q.png"] {
-            let bytes = std::fs::read(dir.path().join(f)).unwrap();
-            assert_eq!(&bytes[1..4], b"PNG", "{f}");
-        }
-        let e = wing_planform(&dir.path().join("x.png"), &db, &db, &[SurfaceId(99)]);
-        assert!(e.unwrap_err().to_string().contains("does not exist"));
     }
 }

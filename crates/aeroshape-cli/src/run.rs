@@ -48,7 +48,7 @@ struct RunReport<'a> {
 
 /// Components whose name starts with "wing" (the wing and its tip cap): their support
 /// surfaces are drawn in the planform and section pictures.
-fn wing_surfaces(db: &GeomDb) -> Vec<SurfaceId> {
+pub(crate) fn wing_surfaces(db: &GeomDb) -> Vec<SurfaceId> {
     let mut v: Vec<SurfaceId> = db
         .surface_components
         .iter()
@@ -202,7 +202,7 @@ fn pictures(
 ) -> anyhow::Result<()> {
     let out = |name: &str| dir.join(name);
     let wings = wing_surfaces(study.geometry());
-    crate::plot::quality_histogram(
+    crate::pictures::quality_histogram(
         &out("quality.png"),
         study.baseline_quality(),
         &ev.cell_quality,
@@ -211,12 +211,17 @@ fn pictures(
     .map_err(anyhow::Error::msg)?;
     written.push(out("quality.png").display().to_string());
     if !wings.is_empty() {
-        crate::plot::wing_planform(&out("planform.png"), study.geometry(), &ev.geometry, &wings)
-            .map_err(anyhow::Error::msg)?;
+        crate::pictures::wing_planform(
+            &out("planform.png"),
+            study.geometry(),
+            &ev.geometry,
+            &wings,
+        )
+        .map_err(anyhow::Error::msg)?;
         written.push(out("planform.png").display().to_string());
         let (lo, hi) = span_range(study.geometry(), &wings);
         let stations = [lo + 0.2 * (hi - lo), 0.5 * (lo + hi), hi - 0.02 * (hi - lo)];
-        crate::plot::wing_sections(
+        crate::pictures::wing_sections(
             &out("sections.png"),
             study.geometry(),
             &ev.geometry,
