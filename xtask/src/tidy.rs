@@ -8,6 +8,7 @@ use std::path::Path;
 /// The workspace crates from top (depends on nothing of ours) to bottom. A crate may depend
 /// on crates that come before it. `testkit` may be a dev-dependency of anyone.
 pub const LAYERS: &[&str] = &[
+    "sparse",
     "iges",
     "step",
     "geom-db",

@@ -184,8 +184,8 @@ struct Report<'a> {
     residual: f64,
     increments: usize,
     seconds: Seconds,
-    quality_before: deform::spring::QualitySummary,
-    quality_after: deform::spring::QualitySummary,
+    quality_before: mesh::quality::Summary,
+    quality_after: mesh::quality::Summary,
     deform: &'a deform::DeformReport,
 }
 

@@ -11,17 +11,19 @@
 //! `DEFORM_AMG_CYCLES`, `DEFORM_AMG_STRENGTH` and `DEFORM_AMG_DAMPING=cS,cP` override the
 //! multigrid options of the solve figures; `DEFORM_BENCH_NO_JACOBI` skips the Jacobi-PCG
 //! solve and `DEFORM_BENCH_SOLVES_ONLY` the whole deformations; `DEFORM_BENCH_SETUP_REPS=N`
-//! times N multigrid set-ups in a row instead of the solves.
+//! times N multigrid set-ups in a row instead of the solves; `DEFORM_BENCH_TRACE` prints the
+//! seconds of every set-up step of the whole deformations and of every multigrid level.
 
 use std::hint::black_box;
 use std::time::Instant;
 
 use criterion::{Criterion, Throughput};
-use deform::solve::vecops::V3;
-use deform::solve::{Amg, AmgOptions, Constraints, Entry, Jacobi, SolveOptions, SymMatrix, pcg};
+use deform::solve::{Amg, AmgOptions};
 use deform::{BoundaryConditions, DeformOptions, MarkerRole, SolverKind, deform};
 use mesh::Mesh;
 use rayon::prelude::*;
+use sparse::order;
+use sparse::{Constraints, Entry, Jacobi, SolveOptions, SymMatrix, V3, pcg};
 
 /// The wing-like case ([`deform::generate::wing_in_box`], pitched 5°).
 fn case(n: usize) -> (Mesh, BoundaryConditions) {
@@ -246,39 +248,37 @@ fn node_orders(m: &Mesh, a: &SymMatrix<f32>) {
     let (morton, adj, t_morton) = morton_order(m);
     report("morton", &morton, t_morton);
     let t = Instant::now();
-    let level = deform::spring::level_order(&adj);
+    let level = order::level_order(adj.n_nodes(), |i| adj.neighbours(i));
     let t_level = t.elapsed().as_secs_f64();
     report(
         "morton + level order (deform's)",
-        &then(&morton, &level),
+        &order::then(&morton, &level),
         t_morton + t_level,
     );
     let t = Instant::now();
-    let rcm = mesh::order::reverse_cuthill_mckee(adj.n_nodes(), |i| adj.neighbours(i));
+    let rcm = order::reverse_cuthill_mckee(adj.n_nodes(), |i| adj.neighbours(i));
     let t_rcm = t.elapsed().as_secs_f64();
-    let inv = deform::solve::order::inverse(&rcm);
-    report("morton + RCM", &then(&morton, &inv), t_morton + t_rcm);
+    report(
+        "morton + RCM",
+        &order::then(&morton, &rcm),
+        t_morton + t_rcm,
+    );
 }
 
 /// The Morton order of `m`'s nodes (node i → `perm[i]`), the adjacency of the grid so
 /// renumbered, and the seconds the order took.
 fn morton_order(m: &Mesh) -> (Vec<u32>, mesh::Adjacency, f64) {
     let t = Instant::now();
-    let morton = deform::spring::spatial_order(&m.coords);
+    let morton = order::morton_order(&m.coords);
     let secs = t.elapsed().as_secs_f64();
     let mut mm = m.clone();
     mm.renumber_nodes(&morton).unwrap();
     (morton, mesh::Adjacency::build(&mm), secs)
 }
 
-/// Node numbering `first`, then `second` applied to its result.
-fn then(first: &[u32], second: &[u32]) -> Vec<u32> {
-    first.iter().map(|&p| second[p as usize]).collect()
-}
-
 /// The unknowns of [`system`] (the nodes off the wing and far-field markers, in node order)
-/// reordered by their nodes' indices under `node_perm` (node i → `node_perm[i]`): new unknown
-/// k is old unknown `result[k]`.
+/// reordered by their nodes' indices under `node_perm` (node i → `node_perm[i]`), as a
+/// permutation of the unknowns (`perm[old] = new`, `sparse::order`'s convention).
 fn unknowns_by(m: &Mesh, node_perm: &[u32]) -> Vec<u32> {
     let mut unknown = vec![true; m.n_nodes()];
     for mk in &m.markers {
@@ -291,15 +291,19 @@ fn unknowns_by(m: &Mesh, node_perm: &[u32]) -> Vec<u32> {
     let nodes: Vec<usize> = (0..m.n_nodes()).filter(|&i| unknown[i]).collect();
     let mut new_to_old: Vec<u32> = (0..nodes.len() as u32).collect();
     new_to_old.sort_by_key(|&u| node_perm[nodes[u as usize]]);
-    new_to_old
+    order::inverse(&new_to_old)
 }
 
 /// The system in `deform`'s internal order (Morton curve, then `level_order`).
 fn in_deform_order(m: &Mesh, a: &SymMatrix<f32>, b: &[V3]) -> (SymMatrix<f32>, Vec<V3>) {
     let (morton, adj, _) = morton_order(m);
-    let order = unknowns_by(m, &then(&morton, &deform::spring::level_order(&adj)));
-    let bp = order.iter().map(|&o| b[o as usize]).collect();
-    (a.permuted(&order), bp)
+    let level = order::level_order(adj.n_nodes(), |i| adj.neighbours(i));
+    let perm = unknowns_by(m, &order::then(&morton, &level));
+    let bp = order::inverse(&perm)
+        .iter()
+        .map(|&o| b[o as usize])
+        .collect();
+    (a.permuted(&perm), bp)
 }
 
 /// The environment variable `name` parsed, or `default` when unset or unparsable.
@@ -308,6 +312,11 @@ fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
+}
+
+/// `DEFORM_BENCH_TRACE`: print the set-up's steps and the multigrid's levels.
+fn trace() -> bool {
+    std::env::var_os("DEFORM_BENCH_TRACE").is_some()
 }
 
 /// `DEFORM_BENCH_STIFFNESS` = `l`, `l2` (default) or `volume`.
@@ -393,7 +402,7 @@ fn figures() {
             );
         }
         // `DEFORM_BENCH_SETUP_REPS=N`: N multigrid set-ups in a row, each timed (with
-        // `DEFORM_AMG_TRACE`, per level), instead of the solves.
+        // `DEFORM_BENCH_TRACE`, per level), instead of the solves.
         if let Some(reps) = std::env::var("DEFORM_BENCH_SETUP_REPS")
             .ok()
             .and_then(|v| v.parse::<usize>().ok())
@@ -402,6 +411,18 @@ fn figures() {
                 let t = Instant::now();
                 let amg = Amg::new(&a, &AmgOptions::default()).unwrap();
                 println!("multigrid set-up {:.3} s", t.elapsed().as_secs_f64());
+                if trace() {
+                    for (l, s) in amg.info().setup.iter().enumerate() {
+                        println!(
+                            "  level {l}: nnz(P) {}, aggregate {:.3} s, P {:.3} s, Pt {:.3} s, RAP {:.3} s",
+                            s.prolongator_entries,
+                            s.aggregate,
+                            s.prolongator,
+                            s.transpose,
+                            s.galerkin
+                        );
+                    }
+                }
                 drop(amg);
             }
             continue;
@@ -474,6 +495,11 @@ fn figures() {
             let tt = t.elapsed().as_secs_f64();
             let ct = cpu_s() - c0;
             let r = &d.report;
+            if trace() {
+                for st in &r.setup_steps {
+                    println!("  set-up step {}: {:.3} s", st.step, st.seconds);
+                }
+            }
             println!(
                 "deform [{name}]: {tt:.2} s total (cpu {ct:.2} s); it {} (+{} for R), increments {}; s: setup {:.2} assemble {:.2} precond {:.2} rotation {:.2} solve {:.2} quality {:.2}; q min {:.4} -> {:.4} ({:.1} %), p1 {:.4} -> {:.4}, inverted {}",
                 r.iterations,
@@ -490,7 +516,7 @@ fn figures() {
                 100.0 * r.quality_after.min / r.quality_before.min,
                 r.quality_before.p1,
                 r.quality_after.p1,
-                r.quality_after.inverted
+                r.quality_after.n_nonpositive
             );
         }
         if quick {
@@ -515,7 +541,7 @@ fn figures() {
         .unwrap();
         println!(
             "naive (no R, plane fixed): q min {:.4}, inverted {}",
-            d.report.quality_after.min, d.report.quality_after.inverted
+            d.report.quality_after.min, d.report.quality_after.n_nonpositive
         );
         // Random numbering.
         let mut shuffled = m.clone();

@@ -57,7 +57,7 @@ fn main() {
         100.0 * r.quality_after.min / r.quality_before.min,
         r.quality_before.p1,
         r.quality_after.p1,
-        r.quality_after.inverted,
+        r.quality_after.n_nonpositive,
         r.increments,
         r.iterations,
         t.elapsed().as_secs_f64()

@@ -47,7 +47,7 @@ fn main() {
         r.quality_before.min,
         r.quality_after.min,
         100.0 * r.quality_after.min / r.quality_before.min,
-        r.quality_after.inverted
+        r.quality_after.n_nonpositive
     );
     let s = &r.seconds;
     println!(

@@ -10,6 +10,13 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// An error of the sparse linear algebra (a malformed matrix or graph).
+    #[error(transparent)]
+    Sparse {
+        /// The `sparse` error.
+        #[from]
+        source: sparse::Error,
+    },
     /// A solver option outside its valid range.
     #[error("invalid solver option: {reason}")]
     BadOption {

@@ -4,31 +4,59 @@
 //! Eqs. 27–33), rigid motion of markers (Eqs. 34–35), the paper's point iteration
 //! (Eqs. 22–24) and preconditioned conjugate-gradient solvers. See `docs/crates/deform.md`.
 //!
-//! Layer: depends on `mesh`, and on `geom-db` only to evaluate the support that a sliding
-//! node lies on.
+//! Layer: depends on `sparse` and `mesh`, and on `geom-db` only to evaluate the support
+//! that a sliding node lies on.
 //!
-//! - [`spring`]: the spring system in deviations (Eq. 21) with stiffness choices, R from the
-//!   skin (Eq. 25) propagated by Eq. 26, the quality guard with incremental deformation.
-//! - [`support`]: sliding on geometry supports (Eqs. 27–33), node supports from a grid's
-//!   classification.
-//! - [`bc`]: rigid motion (Eq. 34–35), fixed and sliding markers, node precedence.
-//! - [`rotation`]: element frames and the nearest rotation (polar decomposition).
-//! - [`solve`]: the sparse matrix, deterministic parallel PCG (Jacobi, smoothed-aggregation
-//!   multigrid), the paper's point iteration (Eqs. 22–24), reverse Cuthill–McKee.
+//! For the unknown nodes i (interior and sliding), Eq. 21 in the deviations Δx:
+//! Σ_j K_ij (Δx_j − Δx_i) = Σ_j K_ij (R_ij − I)(x⁰_j − x⁰_i), with the prescribed Δx_j of
+//! moving and fixed nodes moved to the right-hand side: A Δx = b with a_ii = Σ_j K_ij,
+//! a_ij = −K_ij (one scalar matrix, three components). Sliding nodes are constrained to their
+//! plane (or seam line) and the system is solved by projected conjugate gradients, which is
+//! the exact constrained minimum of the spring energy (Eq. 18) — no outer iteration is needed
+//! for planes.
+//!
+//! One idea per module:
+//! - [`options`]: [`DeformOptions`], [`SolverKind`]; [`stiffness`]: [`Stiffness`] and the
+//!   springs K_ij (Eqs. 14–19); `wall_distance`: the distance to the moving boundary.
+//! - `assembly`: the unknowns, the matrix A of Eq. 21, the couplings and right-hand sides;
+//!   `operator`: A, its preconditioner and the solve, per grid state.
+//! - `rfield`: the R field (Eqs. 25–26) from the skin rotations of [`rotation`] (element
+//!   frames and the nearest rotation).
+//! - [`bc`]: rigid motion (Eqs. 34–35), fixed and sliding markers, node precedence;
+//!   [`support`]: sliding on geometry supports (Eqs. 27–33); `sliding`: the tangent
+//!   constraints and the outer iteration.
+//! - `increment`: one increment of the motion; `guard`: the quality guard and its
+//!   increments; [`deformer`]: [`Deformer`] (the reusable set-up), [`Deformed`] and the free
+//!   functions [`deform`], [`deform_on_supports`].
+//! - [`report`]: [`DeformReport`]; [`solve`]: the multigrid preconditioner on `sparse`'s
+//!   matrices and conjugate gradients; [`generate`]: test and benchmark grids.
 
+mod assembly;
 pub mod bc;
+pub mod deformer;
 pub mod error;
 pub mod generate;
+mod guard;
+mod increment;
+mod operator;
+pub mod options;
+pub mod report;
+mod rfield;
 pub mod rotation;
+mod sliding;
 pub mod solve;
-pub mod spring;
+pub mod stiffness;
 pub mod support;
+mod wall_distance;
 
 pub use bc::{BoundaryConditions, MarkerRole, RigidMotion};
-pub use error::{Error, Result};
-pub use spring::{
-    DeformOptions, DeformReport, Deformed, Deformer, QualitySummary, SolverKind, Stiffness,
-    cell_quality, deform, deform_on_supports, deform_on_supports_with_progress,
-    deform_with_progress,
+pub use deformer::{
+    Deformed, Deformer, StiffnessMatrix, deform, deform_on_supports,
+    deform_on_supports_with_progress, deform_with_progress,
 };
+pub use error::{Error, Result};
+pub use guard::cell_quality;
+pub use options::{DeformOptions, SolverKind};
+pub use report::{DeformReport, PhaseTimes, StepTime};
+pub use stiffness::Stiffness;
 pub use support::{Support, Supports};

@@ -11,7 +11,7 @@
 //! of the point nearest to its tentative position x + δ: Eq. 31 is repeated with
 //! RH = (x + δ) − r(u, v) (a Gauss–Newton iteration, safeguarded by step halving and by
 //! clamping to the parameter domain) until the step is below round-off. The node therefore
-//! lies exactly on r(u, v). See [`crate::spring`] for the outer iteration that repeats the
+//! lies exactly on r(u, v). See [`crate::deform_on_supports`] for the outer iteration that repeats the
 //! spring solve with the new tangent spaces.
 //!
 //! Node classification from a grid ([`Supports::from_classes`]) follows the convention of

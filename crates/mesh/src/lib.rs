@@ -24,7 +24,6 @@ pub mod generate;
 pub mod grid;
 pub mod io;
 pub mod msh;
-pub mod order;
 pub mod quality;
 pub mod su2;
 mod text;

@@ -5,11 +5,15 @@
 //! The matrix (node degree on the diagonal, −1 per free neighbour) depends only on the
 //! triangulation, so it is factorised once per component and reused by every update: the
 //! free nodes are put in reverse Cuthill–McKee order and the matrix is factorised by an
-//! envelope (skyline) Cholesky, which creates no entry outside the envelope of that order;
-//! each update is then one forward and one backward substitution per coordinate. A
-//! component whose envelope would be too large for a direct factorisation (cost estimate
-//! above [`MAX_FACTOR_FLOPS`]) is solved by conjugate gradients to a relative residual of
-//! 1e-8 instead (smoothing follows the map, so a more accurate map buys nothing there).
+//! envelope (skyline) Cholesky ([`sparse::envelope`]), which creates no entry outside the
+//! envelope of that order; each update is then one forward and one backward substitution per
+//! coordinate. A component whose envelope would be too large for a direct factorisation
+//! (cost estimate above [`MAX_FACTOR_FLOPS`]) is solved by Jacobi-preconditioned conjugate
+//! gradients (`sparse::pcg`, both coordinates at once) to a relative residual of 1e-8
+//! instead (smoothing follows the map, so a more accurate map buys nothing there).
+
+use sparse::envelope::{Envelope, EnvelopeCholesky};
+use sparse::{Constraints, Jacobi, SolveOptions, SymMatrix, V3, order, pcg};
 
 /// Largest estimated cost (multiply–adds) of a direct factorisation; above it the map is
 /// solved iteratively.
@@ -19,24 +23,13 @@ pub const MAX_FACTOR_FLOPS: f64 = 4e8;
 #[derive(Debug, Clone)]
 pub struct HarmonicMap {
     n_fixed: usize,
-    /// Free-node adjacency (free indices, CSR) and the fixed neighbours of each free node.
-    free_ptr: Vec<usize>,
-    free_adj: Vec<u32>,
+    /// The Laplacian of the free nodes (free indices): degree on the diagonal, −1 per free
+    /// neighbour.
+    a: SymMatrix,
+    /// The fixed neighbours of each free node (CSR).
     fixed_ptr: Vec<usize>,
     fixed_adj: Vec<u32>,
-    degree: Vec<f64>,
-    factor: Option<Envelope>,
-}
-
-/// Envelope Cholesky factor L (A = L Lᵀ) in the order `order` (position → free index).
-#[derive(Debug, Clone)]
-struct Envelope {
-    order: Vec<u32>,
-    /// First column of row p of L.
-    first: Vec<usize>,
-    /// Start of row p in `l` (row p holds columns first[p]..=p).
-    start: Vec<usize>,
-    l: Vec<f64>,
+    factor: Option<EnvelopeCholesky>,
 }
 
 impl HarmonicMap {
@@ -78,17 +71,20 @@ impl HarmonicMap {
                 fixed_ptr[v - n_fixed + 1] = fixed_adj.len();
             }
         }
-        let mut map = Self {
+        let a = SymMatrix {
+            diag: degree,
+            vals: vec![-1.0; free_adj.len()],
+            offsets: free_ptr,
+            cols: free_adj,
+        };
+        let factor = factorise(&a);
+        Self {
             n_fixed,
-            free_ptr,
-            free_adj,
+            a,
             fixed_ptr,
             fixed_adj,
-            degree,
-            factor: None,
-        };
-        map.factor = map.factorise();
-        map
+            factor,
+        }
     }
 
     /// Whether the map is solved by the direct factorisation.
@@ -96,177 +92,77 @@ impl HarmonicMap {
         self.factor.is_some()
     }
 
-    fn free_neighbours(&self, i: usize) -> &[u32] {
-        &self.free_adj[self.free_ptr[i]..self.free_ptr[i + 1]]
-    }
-
-    /// Envelope Cholesky in RCM order; `None` when too costly or not positive definite (a
-    /// free part without a fixed neighbour).
-    fn factorise(&self) -> Option<Envelope> {
-        let m = self.degree.len();
-        if m == 0 {
-            return None;
-        }
-        let order = mesh::order::reverse_cuthill_mckee(m, |i| self.free_neighbours(i));
-        let mut pos = vec![0usize; m];
-        for (p, &i) in order.iter().enumerate() {
-            pos[i as usize] = p;
-        }
-        let mut first: Vec<usize> = (0..m).collect();
-        for (p, &i) in order.iter().enumerate() {
-            for &j in self.free_neighbours(i as usize) {
-                first[p] = first[p].min(pos[j as usize]);
-            }
-        }
-        let flops: f64 = (0..m).map(|p| ((p - first[p]) as f64).powi(2) / 2.0).sum();
-        if flops > MAX_FACTOR_FLOPS {
-            return None;
-        }
-        let mut start = vec![0usize; m + 1];
-        for p in 0..m {
-            start[p + 1] = start[p] + (p - first[p] + 1);
-        }
-        let mut l = vec![0.0; start[m]];
-        for (p, &i) in order.iter().enumerate() {
-            l[start[p] + (p - first[p])] = self.degree[i as usize];
-            for &j in self.free_neighbours(i as usize) {
-                let q = pos[j as usize];
-                if q < p {
-                    l[start[p] + (q - first[p])] = -1.0;
-                }
-            }
-        }
-        for p in 0..m {
-            let fp = first[p];
-            for q in fp..=p {
-                let fq = first[q];
-                let k0 = fp.max(fq);
-                let mut s = l[start[p] + (q - fp)];
-                let (rp, rq) = (&l[start[p] + (k0 - fp)..], &l[start[q] + (k0 - fq)..]);
-                for k in 0..(q - k0) {
-                    s -= rp[k] * rq[k];
-                }
-                if q == p {
-                    if s <= 0.0 || !s.is_finite() {
-                        return None;
-                    }
-                    l[start[p] + (p - fp)] = s.sqrt();
-                } else {
-                    l[start[p] + (q - fp)] = s / l[start[q] + (q - fq)];
-                }
-            }
-        }
-        Some(Envelope {
-            order,
-            first,
-            start,
-            l,
-        })
-    }
-
     /// Solves for the free nodes' displacements: `d[..n_fixed]` holds the boundary data,
     /// `d[n_fixed..]` receives the solution.
     pub fn solve(&self, d: &mut [[f64; 2]]) {
-        let m = self.degree.len();
+        let m = self.a.n();
         if m == 0 {
             return;
         }
+        let Some(f) = &self.factor else {
+            let x = self.iterative(d);
+            for (i, v) in x.into_iter().enumerate() {
+                d[i + self.n_fixed] = [v[0], v[1]];
+            }
+            return;
+        };
         for comp in 0..2 {
-            let b = self.rhs(d, comp);
-            let x = match &self.factor {
-                Some(f) => f.solve(&b),
-                None => self.cg(&b),
-            };
+            let b: Vec<f64> = self.rhs(d).iter().map(|v| v[comp]).collect();
+            let x = f.solve(&b);
             for (i, v) in x.into_iter().enumerate() {
                 d[i + self.n_fixed][comp] = v;
             }
         }
     }
 
-    /// Right-hand side of coordinate `comp`: per free node, the sum of its fixed neighbours'
-    /// boundary data.
-    fn rhs(&self, d: &[[f64; 2]], comp: usize) -> Vec<f64> {
-        (0..self.degree.len())
+    /// Right-hand side: per free node, the sum of its fixed neighbours' boundary data (both
+    /// coordinates; the third component zero).
+    fn rhs(&self, d: &[[f64; 2]]) -> Vec<V3> {
+        (0..self.a.n())
             .map(|i| {
-                self.fixed_adj[self.fixed_ptr[i]..self.fixed_ptr[i + 1]]
-                    .iter()
-                    .map(|&w| d[w as usize][comp])
-                    .sum()
+                let fixed = &self.fixed_adj[self.fixed_ptr[i]..self.fixed_ptr[i + 1]];
+                let sum = |c: usize| fixed.iter().map(|&w| d[w as usize][c]).sum();
+                [sum(0), sum(1), 0.0]
             })
             .collect()
     }
 
-    /// Conjugate gradients from zero to a relative residual of 1e-8.
-    fn cg(&self, b: &[f64]) -> Vec<f64> {
-        let m = b.len();
-        let apply = |x: &[f64], y: &mut [f64]| {
-            for i in 0..m {
-                let mut s = self.degree[i] * x[i];
-                for &w in self.free_neighbours(i) {
-                    s -= x[w as usize];
-                }
-                y[i] = s;
-            }
+    /// Jacobi-preconditioned conjugate gradients from zero to a relative residual of 1e-8,
+    /// both coordinates at once.
+    fn iterative(&self, d: &[[f64; 2]]) -> Vec<V3> {
+        let m = self.a.n();
+        let b = self.rhs(d);
+        let mut x = vec![[0.0; 3]; m];
+        let opts = SolveOptions {
+            rel_tol: 1e-8,
+            max_iters: (m + 100).min(20_000),
         };
-        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-        let mut x = vec![0.0; m];
-        let mut r = b.to_vec();
-        let mut p = r.clone();
-        let mut ap = vec![0.0; m];
-        let mut rr = dot(&r, &r);
-        let tol = 1e-16 * dot(b, b).max(1e-300);
-        for _ in 0..(m + 100).min(20_000) {
-            if rr <= tol {
-                break;
-            }
-            apply(&p, &mut ap);
-            let alpha = rr / dot(&p, &ap);
-            for i in 0..m {
-                x[i] += alpha * p[i];
-                r[i] -= alpha * ap[i];
-            }
-            let rr2 = dot(&r, &r);
-            let beta = rr2 / rr;
-            rr = rr2;
-            for i in 0..m {
-                p[i] = r[i] + beta * p[i];
-            }
-        }
+        pcg(
+            &self.a,
+            &b,
+            &mut x,
+            &Jacobi::new(&self.a),
+            &Constraints::default(),
+            &opts,
+        );
         x
     }
 }
 
-impl Envelope {
-    /// x = A⁻¹ b (b and x indexed by free node).
-    fn solve(&self, b: &[f64]) -> Vec<f64> {
-        let m = b.len();
-        // L y = b (in band order).
-        let mut y: Vec<f64> = self.order.iter().map(|&i| b[i as usize]).collect();
-        for p in 0..m {
-            let fp = self.first[p];
-            let row = &self.l[self.start[p]..self.start[p + 1]];
-            let mut s = y[p];
-            for (k, lk) in row[..p - fp].iter().enumerate() {
-                s -= lk * y[fp + k];
-            }
-            y[p] = s / row[p - fp];
-        }
-        // Lᵀ x = y (column sweep over the rows of L).
-        for p in (0..m).rev() {
-            let fp = self.first[p];
-            let row = &self.l[self.start[p]..self.start[p + 1]];
-            y[p] /= row[p - fp];
-            let v = y[p];
-            for (k, lk) in row[..p - fp].iter().enumerate() {
-                y[fp + k] -= lk * v;
-            }
-        }
-        let mut x = vec![0.0; m];
-        for (p, &i) in self.order.iter().enumerate() {
-            x[i as usize] = y[p];
-        }
-        x
+/// Envelope Cholesky of `a` in reverse Cuthill–McKee order; `None` when too costly
+/// ([`MAX_FACTOR_FLOPS`]) or not positive definite (a free part without a fixed neighbour):
+/// the map is then solved iteratively.
+fn factorise(a: &SymMatrix) -> Option<EnvelopeCholesky> {
+    let m = a.n();
+    if m == 0 {
+        return None;
     }
+    let perm = order::reverse_cuthill_mckee(m, |i| a.row(i).0);
+    let env = Envelope::new(m, |i| a.row(i).0, &perm);
+    if env.flops() > MAX_FACTOR_FLOPS {
+        return None;
+    }
+    EnvelopeCholesky::factor(env, a).ok()
 }
 
 #[cfg(test)]
@@ -320,14 +216,14 @@ mod tests {
             .collect();
         map.solve(&mut d);
         let mut it = d.clone();
-        let x = map.cg(&map.rhs(&d, 0));
+        let x = map.iterative(&d);
         for (k, v) in x.iter().enumerate() {
-            it[k + nb][0] = *v;
+            it[k + nb] = [v[0], v[1]];
         }
         for k in nb..uv.len() {
             let e = f(uv[k]);
             assert!((d[k][0] - e[0]).abs() < 1e-13 && (d[k][1] - e[1]).abs() < 1e-13);
-            assert!((it[k][0] - e[0]).abs() < 1e-7);
+            assert!((it[k][0] - e[0]).abs() < 1e-7 && (it[k][1] - e[1]).abs() < 1e-7);
         }
     }
 }

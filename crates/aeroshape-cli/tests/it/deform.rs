@@ -68,7 +68,7 @@ fn pitch_naca_writes_grid_and_report() {
     for k in ["read", "assemble", "solve", "write"] {
         assert!(r["seconds"][k].as_f64().unwrap() >= 0.0);
     }
-    assert_eq!(r["quality_after"]["inverted"], 0);
+    assert_eq!(r["quality_after"]["n_nonpositive"], 0);
     assert_eq!(r["nodes"], a.n_nodes());
 }
 

@@ -22,17 +22,17 @@ pub struct Quality {
 impl Quality {
     /// The summary of a per-cell quality field.
     pub fn of(q: &[f64]) -> Self {
-        deform::QualitySummary::of(q).into()
+        mesh::quality::summary(q).into()
     }
 }
 
-impl From<deform::QualitySummary> for Quality {
-    fn from(s: deform::QualitySummary) -> Self {
+impl From<mesh::quality::Summary> for Quality {
+    fn from(s: mesh::quality::Summary) -> Self {
         Self {
             min: s.min,
             mean: s.mean,
             p1: s.p1,
-            inverted: s.inverted,
+            inverted: s.n_nonpositive,
             cells: s.measured,
         }
     }

@@ -107,7 +107,7 @@ fn nodes_slide_on_a_curved_support_surface_and_stay_on_it() {
     )
     .unwrap();
     let r = &d.report;
-    assert_eq!(r.quality_after.inverted, 0);
+    assert_eq!(r.quality_after.n_nonpositive, 0);
     assert!(r.sliding_on_supports > 40, "{}", r.sliding_on_supports);
     // The outer iteration re-linearised at least once (the support is curved).
     assert!(r.slide_iterations >= 2, "{r:?}");
@@ -296,7 +296,7 @@ fn nodes_slide_on_the_cylinder_fixture_and_stay_on_it() {
     };
     let sp = Supports { db: &db, nodes };
     let d = deform_on_supports(&m, &bc, &sp, &DeformOptions::default()).unwrap();
-    assert_eq!(d.report.quality_after.inverted, 0);
+    assert_eq!(d.report.quality_after.n_nonpositive, 0);
     let mut turned = 0.0f64;
     for &(v, s) in &d.supports {
         let p = d.coords[v as usize];

@@ -1,98 +1,20 @@
-//! Sparse matrices in compressed sparse row form.
+//! Symmetric sparse matrices with the diagonal apart: the spring system's matrix.
 //!
-//! [`SymMatrix`] is the spring system's matrix: symmetric, diagonal stored apart, the
-//! off-diagonal entries of every row stored in full (both triangles) so that the
-//! matrix–vector product runs row by row in parallel with no write conflicts. One scalar
-//! matrix serves the three components: [`SymMatrix::mul`] multiplies a vector of 3-vectors in
-//! one pass over the matrix. [`Csr`] is a general rectangular matrix (multigrid transfer
-//! operators).
+//! [`SymMatrix`] stores the diagonal apart and the off-diagonal entries of every row in full
+//! (both triangles), so that the matrix–vector product runs row by row in parallel with no
+//! write conflicts. One scalar matrix serves the three components: [`SymMatrix::mul`]
+//! multiplies a vector of 3-vectors in one pass over the matrix.
 //!
-//! A [`SymMatrix`] stores its off-diagonal values as any [`Entry`] type: f64, or f32 for the
-//! spring matrix, whose stiffnesses are rounded to single precision once, when they are
-//! computed (the diagonal and every product stay f64; the matrix is then exactly the one of
-//! the rounded springs, and a product reads 8 instead of 12 bytes per entry).
+//! The off-diagonal values are stored as any [`Entry`] type: f64, or f32 for a matrix whose
+//! values were rounded to single precision once, when they were computed (the diagonal and
+//! every product stay f64; the matrix is then exactly the one of the rounded values, and a
+//! product reads 8 instead of 12 bytes per entry).
 
 use rayon::prelude::*;
 
-use super::madd::{self, Kernel, MulAdd};
-use super::vecops::{CHUNK, V3, chunked_sum};
 use crate::error::{Error, Result};
-
-/// A node graph: for node i, its neighbours are `adj[offsets[i]..offsets[i + 1]]`.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Graph {
-    /// Row offsets, length n + 1.
-    pub offsets: Vec<usize>,
-    /// Neighbour indices (no self loops).
-    pub adj: Vec<u32>,
-}
-
-impl Graph {
-    /// Builds a symmetric graph from undirected edges (duplicates and self loops removed,
-    /// neighbours sorted).
-    pub fn from_edges(n: usize, edges: &[[u32; 2]]) -> Result<Self> {
-        let mut deg = vec![0usize; n];
-        for (k, &[a, b]) in edges.iter().enumerate() {
-            if a as usize >= n || b as usize >= n {
-                return Err(Error::BadGraph {
-                    reason: format!("edge {k} ({a}, {b}) refers to a node ≥ {n}"),
-                });
-            }
-            if a != b {
-                deg[a as usize] += 1;
-                deg[b as usize] += 1;
-            }
-        }
-        let mut offsets = vec![0usize; n + 1];
-        for i in 0..n {
-            offsets[i + 1] = offsets[i] + deg[i];
-        }
-        let mut fill = offsets.clone();
-        let mut adj = vec![0u32; offsets[n]];
-        for &[a, b] in edges {
-            if a != b {
-                adj[fill[a as usize]] = b;
-                fill[a as usize] += 1;
-                adj[fill[b as usize]] = a;
-                fill[b as usize] += 1;
-            }
-        }
-        // Sort and deduplicate each row, then compact.
-        let mut out_off = vec![0usize; n + 1];
-        let mut out = Vec::with_capacity(adj.len());
-        for i in 0..n {
-            let row = &mut adj[offsets[i]..offsets[i + 1]];
-            row.sort_unstable();
-            let mut last = u32::MAX;
-            for &j in row.iter() {
-                if j != last {
-                    out.push(j);
-                    last = j;
-                }
-            }
-            out_off[i + 1] = out.len();
-        }
-        Ok(Self {
-            offsets: out_off,
-            adj: out,
-        })
-    }
-
-    /// Number of nodes.
-    pub fn len(&self) -> usize {
-        self.offsets.len() - 1
-    }
-
-    /// True for a graph without nodes.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Neighbours of node i.
-    pub fn neighbours(&self, i: usize) -> &[u32] {
-        &self.adj[self.offsets[i]..self.offsets[i + 1]]
-    }
-}
+use crate::madd::{self, Kernel, MulAdd};
+use crate::vec3::{CHUNK, V3, chunked_sum};
 
 /// The storage type of a [`SymMatrix`]'s off-diagonal values (f64 or f32); arithmetic is in
 /// f64 whatever the storage.
@@ -220,8 +142,8 @@ impl<T: Entry> SymMatrix<T> {
     }
 
     /// One row's product (a_ii x_i + Σ_j a_ij x_j) for the three components, with the
-    /// multiply–adds of [`madd::run`] (bit for bit the row's value in [`SymMatrix::mul`]).
-    pub(crate) fn row_mul(&self, i: usize, x: &[V3]) -> V3 {
+    /// multiply–adds of `madd::run` (bit for bit the row's value in [`SymMatrix::mul`]).
+    pub fn row_mul(&self, i: usize, x: &[V3]) -> V3 {
         struct Row<'a, T: Entry> {
             a: &'a SymMatrix<T>,
             i: usize,
@@ -252,7 +174,7 @@ impl<T: Entry> SymMatrix<T> {
     }
 
     /// Calls `f(i, (A x)_i)` for the rows `lo..hi` in increasing order, the whole loop
-    /// (`f` included) run by [`madd::run`]. Callers mark `f` `#[inline(always)]`: without
+    /// (`f` included) run by `madd::run`. Callers mark `f` `#[inline(always)]`: without
     /// it the compiler kept the restriction's and the smoother's per-row closures as a call
     /// per row (multigrid solve at 1M, one process, alternated: median 1.232 → 1.169 s in 16
     /// pairs, 1.158 → 1.145 s in 8).
@@ -261,7 +183,7 @@ impl<T: Entry> SymMatrix<T> {
     /// dependent chains of additions overlap in the processor; each row's own sum runs in the
     /// same order as [`SymMatrix::row_mul`], so the results are bit for bit those of row_mul.
     #[inline]
-    pub(crate) fn rows_mul<F: FnMut(usize, V3)>(&self, lo: usize, hi: usize, x: &[V3], f: F) {
+    pub fn rows_mul<F: FnMut(usize, V3)>(&self, lo: usize, hi: usize, x: &[V3], f: F) {
         struct Rows<'a, T: Entry, F> {
             a: &'a SymMatrix<T>,
             lo: usize,
@@ -393,11 +315,13 @@ impl<T: Entry> SymMatrix<T> {
         })
     }
 
-    /// The matrix with rows and columns renumbered: new index k is old index `perm[k]`.
+    /// The matrix with rows and columns renumbered by `perm` (old index i becomes `perm[i]`,
+    /// the convention of [`crate::order`]); rows sorted by column.
     pub fn permuted(&self, perm: &[u32]) -> Self {
         let n = self.n();
         assert_eq!(perm.len(), n);
-        let inv = super::order::inverse(perm);
+        let inv = perm;
+        let perm = crate::order::inverse(perm);
         let mut offsets = vec![0usize; n + 1];
         for k in 0..n {
             let o = perm[k] as usize;
@@ -426,6 +350,41 @@ impl<T: Entry> SymMatrix<T> {
         }
     }
 
+    /// The whole matrix (diagonal included, values as f64, columns sorted in each row) as a
+    /// [`sprs::CsMat`] in CSR form: the workspace's public interchange type for sparse
+    /// matrices. Fails on a malformed matrix (see [`SymMatrix::validate`]).
+    pub fn to_csmat(&self) -> Result<sprs::CsMat<f64>> {
+        let n = self.n();
+        if self.offsets.len() != n + 1
+            || self.offsets[n] != self.cols.len()
+            || self.cols.len() != self.vals.len()
+        {
+            return Err(Error::BadGraph {
+                reason: "inconsistent matrix array lengths".into(),
+            });
+        }
+        let mut indptr = Vec::with_capacity(n + 1);
+        let mut indices = Vec::with_capacity(self.cols.len() + n);
+        let mut data = Vec::with_capacity(self.cols.len() + n);
+        indptr.push(0);
+        let mut row: Vec<(usize, f64)> = Vec::new();
+        for i in 0..n {
+            row.clear();
+            row.push((i, self.diag[i]));
+            let (cols, vals) = self.row(i);
+            row.extend(cols.iter().zip(vals).map(|(&c, &v)| (c as usize, v.get())));
+            row.sort_by_key(|e| e.0);
+            for &(c, v) in &row {
+                indices.push(c);
+                data.push(v);
+            }
+            indptr.push(indices.len());
+        }
+        sprs::CsMat::try_new((n, n), indptr, indices, data).map_err(|e| Error::BadGraph {
+            reason: format!("{}", e.3),
+        })
+    }
+
     /// Dense copy (tests and the coarsest multigrid level).
     pub fn to_dense(&self) -> Vec<Vec<f64>> {
         let n = self.n();
@@ -438,113 +397,4 @@ impl<T: Entry> SymMatrix<T> {
         }
         d
     }
-}
-
-/// General sparse matrix in CSR (rectangular allowed; the diagonal is not special).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Csr {
-    /// Number of columns.
-    pub ncols: usize,
-    /// Row offsets, length rows + 1.
-    pub offsets: Vec<usize>,
-    /// Column indices, sorted within a row.
-    pub cols: Vec<u32>,
-    /// Values.
-    pub vals: Vec<f64>,
-}
-
-impl Csr {
-    /// Number of rows.
-    pub fn nrows(&self) -> usize {
-        self.offsets.len() - 1
-    }
-
-    /// Builds the matrix from rows computed independently in parallel (deterministic: each
-    /// row by one task; [`build_rows`]).
-    pub(crate) fn from_rows<F>(nrows: usize, ncols: usize, row: F) -> Self
-    where
-        F: Fn(usize, &mut Vec<(u32, f64)>) + Sync,
-    {
-        let (offsets, entries) = build_rows(nrows, row, |e| e);
-        let (cols, vals) = entries.into_iter().unzip();
-        Self {
-            ncols,
-            offsets,
-            cols,
-            vals,
-        }
-    }
-
-    /// The entries of row `i`: their columns and values.
-    #[inline]
-    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
-        let r = self.offsets[i]..self.offsets[i + 1];
-        (&self.cols[r.clone()], &self.vals[r])
-    }
-}
-
-/// The rows of a sparse matrix, computed in parallel blocks of [`CHUNK`] rows: `row(i, buf)`
-/// fills row i's (column, value) pairs into an empty buffer and `put` turns each pair into a
-/// stored entry. Returns the row offsets and the entries, the blocks copied into place in
-/// parallel. Each row is computed by one task, so the result does not depend on the thread
-/// count.
-pub(crate) fn build_rows<E, F, P>(nrows: usize, row: F, put: P) -> (Vec<usize>, Vec<E>)
-where
-    E: Copy + Default + Send + Sync,
-    F: Fn(usize, &mut Vec<(u32, f64)>) + Sync,
-    P: Fn((u32, f64)) -> E + Sync,
-{
-    let blocks: Vec<(Vec<usize>, Vec<E>)> = (0..nrows.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|b| {
-            let (lo, hi) = (b * CHUNK, ((b + 1) * CHUNK).min(nrows));
-            let mut lens = Vec::with_capacity(hi - lo);
-            let mut entries = Vec::new();
-            let mut buf = Vec::new();
-            for i in lo..hi {
-                buf.clear();
-                row(i, &mut buf);
-                lens.push(buf.len());
-                entries.extend(buf.iter().map(|&e| put(e)));
-            }
-            (lens, entries)
-        })
-        .collect();
-    let mut offsets = Vec::with_capacity(nrows + 1);
-    offsets.push(0usize);
-    let mut last = 0;
-    for l in blocks.iter().flat_map(|b| &b.0) {
-        last += l;
-        offsets.push(last);
-    }
-    let mut entries = vec![E::default(); last];
-    let mut pieces = Vec::with_capacity(blocks.len());
-    let mut rest = entries.as_mut_slice();
-    for b in &blocks {
-        let (piece, tail) = rest.split_at_mut(b.1.len());
-        pieces.push(piece);
-        rest = tail;
-    }
-    pieces
-        .into_par_iter()
-        .zip(&blocks)
-        .for_each(|(piece, b)| piece.copy_from_slice(&b.1));
-    (offsets, entries)
-}
-
-/// Sorts (column, value) pairs by column (stable) and sums duplicates in their order (the
-/// reference of the multigrid prolongator's row merge, in tests).
-#[cfg(test)]
-pub(crate) fn merge_row(buf: &mut Vec<(u32, f64)>) {
-    buf.sort_by_key(|e| e.0);
-    let mut w = 0;
-    for r in 0..buf.len() {
-        if w > 0 && buf[w - 1].0 == buf[r].0 {
-            buf[w - 1].1 += buf[r].1;
-        } else {
-            buf[w] = buf[r];
-            w += 1;
-        }
-    }
-    buf.truncate(w);
 }

@@ -14,14 +14,14 @@ pub type V3 = [f64; 3];
 pub const CHUNK: usize = 4096;
 
 /// Adds chunk partial sums in chunk order.
-pub(crate) fn ordered_sum(parts: Vec<f64>) -> f64 {
+pub fn ordered_sum(parts: Vec<f64>) -> f64 {
     parts.into_iter().fold(0.0, |a, b| a + b)
 }
 
 /// Runs `f(first index, chunk)` on the fixed chunks of [`CHUNK`] entries of `out` in
 /// parallel and adds the values it returns in chunk order: the reduction of every fused
 /// kernel that writes a vector and sums over it (deterministic for any thread count).
-pub(crate) fn chunked_sum<F>(out: &mut [V3], f: F) -> f64
+pub fn chunked_sum<F>(out: &mut [V3], f: F) -> f64
 where
     F: Fn(usize, &mut [V3]) -> f64 + Sync + Send,
 {
@@ -36,7 +36,7 @@ where
 /// `data` cut into one slice per chunk of `chunk` rows (of `rows`), rows r of which start
 /// at `start(r)` in `data` (`start(rows)` is its end): each chunk of a CSR array can then be
 /// written by its own task.
-pub(crate) fn row_chunks<T>(
+pub fn row_chunks<T>(
     data: &mut [T],
     rows: usize,
     chunk: usize,

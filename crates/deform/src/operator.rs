@@ -1,0 +1,172 @@
+//! The linear operator of Eqs. 21 and 26 at one grid state ([`Operator`]): the spring
+//! matrix, its preconditioner, the couplings to prescribed nodes and the skin elements'
+//! initial frames, built once per state; and the linear solve with the chosen solver.
+
+use std::time::Instant;
+
+use mesh::{Adjacency, Mesh};
+use nalgebra::Matrix3;
+use rayon::prelude::*;
+use sparse::{
+    Constraints, Csr, Jacobi, SolveOptions, SolveReport, SymMatrix, V3, pcg, point_iteration,
+};
+
+use crate::assembly::{System, assemble, couplings};
+use crate::bc::{Classified, NodeRole};
+use crate::error::{Error, Result};
+use crate::options::{DeformOptions, SolverKind};
+use crate::report::{PhaseTimes, Steps};
+use crate::rfield::{element_size, skin_points};
+use crate::rotation::frame;
+use crate::solve::{Amg, AmgOptions};
+use crate::stiffness::{Stiffness, springs};
+
+/// The preconditioner of the solves (none for the point iteration).
+pub(crate) enum Pre<'a> {
+    Amg(Amg<'a, f32>),
+    Jacobi(Jacobi),
+    None,
+}
+
+/// Everything of Eqs. 21 and 26 that depends only on the grid state an increment starts
+/// from, built once per state: the spring matrix, its preconditioner, the couplings to
+/// prescribed nodes and the skin elements' initial frames.
+pub(crate) struct Operator {
+    /// The matrix (None when the multigrid hierarchy owns it).
+    a: Option<SymMatrix<f32>>,
+    pub pre: Pre<'static>,
+    /// [`couplings`] at this state.
+    pub couplings: Csr,
+    /// Per skin element: S̄⁻¹ of its initial frame (Eq. 25) and its size (the weight of its
+    /// rotation at its nodes); None for a degenerate element.
+    pub skin: Vec<Option<(Matrix3<f64>, f64)>>,
+}
+
+impl Operator {
+    /// Springs at `x`, assembly of A and its preconditioner; `distance`: the wall distance
+    /// at `x` when already computed (see [`springs`]). The steps are marked in `steps`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        mesh: &Mesh,
+        cls: &Classified,
+        sys: &System,
+        adj: &Adjacency,
+        x: &[[f64; 3]],
+        opts: &DeformOptions,
+        times: &mut PhaseTimes,
+        steps: &mut Steps,
+        distance: Option<Vec<f64>>,
+    ) -> Result<Self> {
+        let t = Instant::now();
+        let moving: Vec<bool> = if opts.stiffness == Stiffness::WallDistance {
+            cls.roles
+                .iter()
+                .map(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        steps.restart();
+        let sp = springs(mesh, x, opts.stiffness, adj, &moving, distance);
+        steps.mark("springs");
+        let a = assemble(sys, adj, &sp)?;
+        let couplings = couplings(sys, adj, &sp);
+        steps.mark("assemble");
+        let skin = if opts.adapt_rotation {
+            cls.skin
+                .par_iter()
+                .with_min_len(256)
+                .map(|e| {
+                    let p = skin_points(e, x);
+                    let p = &p[..e.len().min(3)];
+                    Some((frame(p)?.try_inverse()?, element_size(p)))
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        times.assemble += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let (a, pre) = match opts.solver {
+            SolverKind::PcgMultigrid => {
+                (None, Pre::Amg(Amg::new_owned(a, &AmgOptions::default())?))
+            }
+            SolverKind::PcgJacobi => {
+                let j = Jacobi::new(&a);
+                (Some(a), Pre::Jacobi(j))
+            }
+            SolverKind::PointIteration => (Some(a), Pre::None),
+        };
+        times.precond += t.elapsed().as_secs_f64();
+        steps.mark("precond");
+        Ok(Self {
+            a,
+            pre,
+            couplings,
+            skin,
+        })
+    }
+
+    /// The spring matrix A.
+    pub fn matrix(&self) -> &SymMatrix<f32> {
+        match (&self.a, &self.pre) {
+            (Some(a), _) => a,
+            (None, Pre::Amg(m)) => m.fine(),
+            (None, _) => unreachable!("the matrix is kept unless the hierarchy owns it"),
+        }
+    }
+
+    /// Runs one linear solve A x = b with the chosen solver, to `opts.rel_tol`; `step_len`
+    /// is the largest boundary displacement (the point iteration's step criterion).
+    pub fn solve(
+        &self,
+        b: &[V3],
+        x: &mut [V3],
+        cons: &Constraints,
+        opts: &DeformOptions,
+        step_len: f64,
+    ) -> SolveReport {
+        self.solve_to(b, x, cons, opts, step_len, opts.rel_tol)
+    }
+
+    /// [`Operator::solve`] to the relative residual `rel_tol`.
+    pub fn solve_to(
+        &self,
+        b: &[V3],
+        x: &mut [V3],
+        cons: &Constraints,
+        opts: &DeformOptions,
+        step_len: f64,
+        rel_tol: f64,
+    ) -> SolveReport {
+        let a = self.matrix();
+        let so = SolveOptions {
+            rel_tol,
+            max_iters: opts.max_iters,
+        };
+        match &self.pre {
+            Pre::Amg(m) => pcg(a, b, x, m, cons, &so),
+            Pre::Jacobi(m) => pcg(a, b, x, m, cons, &so),
+            Pre::None => point_iteration(a, b, x, cons, 1.0, opts.step_rel_tol * step_len, &so),
+        }
+    }
+}
+
+/// Fails with [`Error::NoConvergence`] naming `what` when the solve `rep` did not converge
+/// (the point iteration: when it used up its iterations).
+pub(crate) fn check_converged(rep: &SolveReport, what: &str, opts: &DeformOptions) -> Result<()> {
+    let ok = match opts.solver {
+        SolverKind::PointIteration => rep.iterations < opts.max_iters,
+        _ => rep.converged,
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::NoConvergence {
+            what: what.into(),
+            solver: rep.solver.clone(),
+            iterations: rep.iterations,
+            residual: rep.rel_residual,
+        })
+    }
+}

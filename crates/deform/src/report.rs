@@ -1,0 +1,120 @@
+//! What a deformation did: [`DeformReport`], with the seconds per phase ([`PhaseTimes`]) and
+//! per step of the set-up ([`StepTime`]).
+
+use std::time::Instant;
+
+use mesh::quality::Summary;
+use serde::Serialize;
+
+use crate::bc::PlaneInfo;
+use crate::options::SolverKind;
+use crate::solve::AmgInfo;
+
+/// Seconds per phase.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct PhaseTimes {
+    /// Node classification, adjacency, renumbering.
+    pub setup: f64,
+    /// Matrix and right-hand side assembly (all increments).
+    pub assemble: f64,
+    /// Preconditioner setup (multigrid hierarchy).
+    pub precond: f64,
+    /// R on the skin and its propagation (Eq. 26).
+    pub rotation: f64,
+    /// Linear solves of Eq. 21.
+    pub solve: f64,
+    /// Quality checks.
+    pub quality: f64,
+}
+
+/// Seconds of one step of the set-up ([`crate::Deformer::setup_steps`]): a finer view of
+/// [`PhaseTimes`]' `setup`, `assemble`, `precond` and `quality` for benchmarks.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StepTime {
+    /// The step: `copy`, `classify (input numbering)`, `morton order`, `renumber`,
+    /// `adjacency`, `level order`, `classify`, `unknowns`, `quality`, `springs`, `assemble`,
+    /// `precond`.
+    pub step: &'static str,
+    /// Seconds.
+    pub seconds: f64,
+}
+
+/// Records the seconds of consecutive steps.
+pub(crate) struct Steps {
+    t: Instant,
+    pub list: Vec<StepTime>,
+}
+
+impl Steps {
+    pub fn start() -> Self {
+        Self {
+            t: Instant::now(),
+            list: Vec::new(),
+        }
+    }
+
+    /// Ends the step `step` (begun at the last mark) and starts the next.
+    pub fn mark(&mut self, step: &'static str) {
+        self.list.push(StepTime {
+            step,
+            seconds: self.t.elapsed().as_secs_f64(),
+        });
+        self.t = Instant::now();
+    }
+
+    /// Starts the next step now (time since the last mark is not recorded).
+    pub fn restart(&mut self) {
+        self.t = Instant::now();
+    }
+}
+
+/// What [`crate::deform`] did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DeformReport {
+    /// Nodes of the grid.
+    pub nodes: usize,
+    /// Cells of the grid.
+    pub cells: usize,
+    /// Unknown nodes (interior + sliding).
+    pub unknowns: usize,
+    /// Sliding nodes (constrained to a plane or a seam line).
+    pub sliding: usize,
+    /// Nodes sliding on geometry support curves and surfaces (Eqs. 27–33).
+    pub sliding_on_supports: usize,
+    /// Outer iterations of the sliding on supports, summed over the increments of the last
+    /// attempt (0 without such nodes).
+    pub slide_iterations: usize,
+    /// Largest node update of the last outer iteration, relative to the largest boundary
+    /// displacement of its increment (the convergence measure of the outer iteration).
+    pub slide_update: f64,
+    /// Nodes with prescribed motion (moving markers and displacements).
+    pub moving: usize,
+    /// Planes fitted to sliding markers.
+    pub planes: Vec<PlaneInfo>,
+    /// Increments used (1 unless the guard split the motion).
+    pub increments: usize,
+    /// Attempts made by the guard (increments tried, in order).
+    pub attempts: Vec<usize>,
+    /// Iterations of the Eq. 21 solves, summed over the increments of the last attempt.
+    pub iterations: usize,
+    /// Iterations of the Eq. 26 (R) solves, summed.
+    pub rotation_iterations: usize,
+    /// Largest final relative residual of the Eq. 21 solves.
+    pub residual: f64,
+    /// Solver used.
+    pub solver: SolverKind,
+    /// Multigrid hierarchy of the last increment (when used).
+    pub multigrid: Option<AmgInfo>,
+    /// Cell quality before (DESIGN.md's measure; `n_nonpositive` counts inverted and flat
+    /// cells).
+    pub quality_before: Summary,
+    /// Cell quality after.
+    pub quality_after: Summary,
+    /// Seconds per phase (all attempts; with the set-up for the free functions).
+    pub seconds: PhaseTimes,
+    /// Seconds per step of the set-up (the free functions; empty for
+    /// [`crate::Deformer::deform`], whose set-up was done before).
+    pub setup_steps: Vec<StepTime>,
+    /// Messages of the guard (increments, inverted cells allowed).
+    pub notes: Vec<String>,
+}

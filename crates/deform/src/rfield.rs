@@ -1,0 +1,223 @@
+//! The R field (paper Eqs. 25–26): the rotation of every moving skin element (Eq. 25, see
+//! [`crate::rotation`]), averaged to the skin nodes as unit quaternions (area-weighted sum,
+//! normalised, scalar part w ≥ 0), propagated by Eq. 26 solved for the quaternions' vector
+//! part u (one three-component solve) with the skin values and R = I (u = 0) on fixed nodes
+//! held, starting from R = I; each node's rotation is the unit quaternion with that vector
+//! part, w = √(1 − |u|²) (|u| ≤ 1 by the discrete maximum principle, A being an M-matrix;
+//! clamped against round-off). This replaces a second solve for w followed by
+//! normalisation: both are exact for a uniform rotation and differ by O(θ³) for angles θ in
+//! between (docs/crates/deform.md, "R: adaptation matrices"). R_ij is the normalised sum of
+//! the two end nodes' quaternions — the geodesic midpoint of R_i and R_j, a proper rotation,
+//! at the cost of a few flops per edge instead of an SVD per edge.
+
+use mesh::Mesh;
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use rayon::prelude::*;
+use sparse::{Constraints, V3};
+
+use crate::assembly::{System, rhs};
+use crate::bc::Classified;
+use crate::operator::Operator;
+use crate::options::DeformOptions;
+use crate::rotation::rotation_from_frame;
+
+/// The rotations of one increment: per node, the unit quaternion of R_i (identity where
+/// nothing rotates), and what the Eq. 26 solve did.
+pub(crate) struct RField {
+    /// Vector part u of each node's quaternion.
+    qv: Vec<V3>,
+    /// Scalar part w of each node's quaternion.
+    qw: Vec<f64>,
+    /// False when every R_i is the identity (no R term in the right-hand side).
+    pub any: bool,
+    /// The Eq. 26 solution per unknown, before the clamp to |u| ≤ 1 (the warm start of a
+    /// later call; empty when nothing was solved).
+    pub solution: Vec<V3>,
+    /// Iterations of the Eq. 26 solve.
+    pub iterations: usize,
+}
+
+impl RField {
+    /// R for the motion of the skin from `cur` to `target`, propagated by Eq. 26 with the
+    /// operator `op` of the state `cur`; `warm`: the Eq. 26 solution of an earlier result
+    /// (per unknown) to start from.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        mesh: &Mesh,
+        cls: &Classified,
+        sys: &System,
+        op: &Operator,
+        cur: &[[f64; 3]],
+        target: &[[f64; 3]],
+        warm: Option<&[V3]>,
+        opts: &DeformOptions,
+    ) -> Self {
+        let n = cur.len();
+        let mut qv: Vec<V3> = vec![[0.0; 3]; n];
+        let mut qw: Vec<f64> = vec![1.0; n];
+        let mut any_rot = false;
+        let mut solution = Vec::new();
+        let mut iterations = 0;
+        if opts.adapt_rotation && !cls.skin.is_empty() {
+            let mut acc: Vec<[f64; 4]> = vec![[0.0; 4]; n];
+            let mut touched = vec![false; n];
+            // Per element (in parallel; the sums below run in element order): its rotation as
+            // a quaternion and its size as the weight.
+            let rots: Vec<Option<([f64; 4], f64)>> = cls
+                .skin
+                .par_iter()
+                .zip(&op.skin)
+                .with_min_len(256)
+                .map(|(e, f)| {
+                    let (inv0, size) = (*f)?;
+                    let k = e.len().min(3);
+                    let (p0, p1) = (skin_points(e, cur), skin_points(e, target));
+                    let r = if p0 == p1 {
+                        Matrix3::identity()
+                    } else {
+                        rotation_from_frame(&inv0, &p1[..k])?
+                    };
+                    let mut q = quat(&r);
+                    if mesh.dim == 2 {
+                        // Plane grids rotate about z only (drop the round-off of the SVD).
+                        let l = (q[2] * q[2] + q[3] * q[3]).sqrt();
+                        q = [0.0, 0.0, q[2] / l, q[3] / l];
+                    }
+                    Some((q, size))
+                })
+                .collect();
+            for (e, rot) in cls.skin.iter().zip(&rots) {
+                let Some((q, w)) = *rot else {
+                    continue;
+                };
+                for &v in e {
+                    let a = &mut acc[v as usize];
+                    for k in 0..4 {
+                        a[k] += w * q[k];
+                    }
+                    touched[v as usize] = true;
+                }
+            }
+            for i in 0..n {
+                if touched[i] {
+                    let a = acc[i];
+                    let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + a[3] * a[3]).sqrt();
+                    if l > 0.0 && (a[0], a[1], a[2]) != (0.0, 0.0, 0.0) {
+                        qv[i] = [a[0] / l, a[1] / l, a[2] / l];
+                        qw[i] = a[3] / l;
+                        any_rot = true;
+                    }
+                }
+            }
+            if any_rot {
+                // Eq. 26 for the quaternions' vector part u (one three-component solve); the
+                // scalar part follows from it, w = √(1 − |u|²) ≥ 0 (the discrete maximum
+                // principle keeps |u| ≤ 1 up to the solver tolerance: clamped), so no second
+                // solve is needed (see the module doc).
+                drop((acc, touched));
+                let bv = rhs(sys, &op.couplings, |j| qv[j], |_, _| [0.0; 3]);
+                let nu = sys.node_of.len();
+                // u = 0 (R = I) as the start, or the previous solution when warm.
+                let mut xv = match warm {
+                    Some(w) if w.len() == nu => w.to_vec(),
+                    _ => vec![[0.0; 3]; nu],
+                };
+                let rv = op.solve(&bv, &mut xv, &Constraints::default(), opts, 1.0);
+                drop(bv);
+                iterations = rv.iterations;
+                for (k, &i) in sys.node_of.iter().enumerate() {
+                    let v = xv[k];
+                    let s2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+                    let (u, w) = if s2 <= 1.0 {
+                        (v, (1.0 - s2).sqrt())
+                    } else {
+                        let l = s2.sqrt();
+                        ([v[0] / l, v[1] / l, v[2] / l], 0.0)
+                    };
+                    qv[i as usize] = u;
+                    qw[i as usize] = w;
+                }
+                solution = xv;
+            }
+        }
+        Self {
+            qv,
+            qw,
+            any: any_rot,
+            solution,
+            iterations,
+        }
+    }
+
+    /// (R_ij − I)(x_j − x_i) for the edge ij at coordinates `x`, R_ij the normalised sum of
+    /// the end nodes' quaternions (zero when the sum vanishes).
+    #[inline]
+    pub fn minus_identity(&self, i: usize, j: usize, x: &[[f64; 3]]) -> V3 {
+        let (qv, qw) = (&self.qv, &self.qw);
+        let u = [
+            qv[i][0] + qv[j][0],
+            qv[i][1] + qv[j][1],
+            qv[i][2] + qv[j][2],
+        ];
+        let w = qw[i] + qw[j];
+        let l2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2] + w * w;
+        if l2 == 0.0 {
+            return [0.0; 3];
+        }
+        let d = [x[j][0] - x[i][0], x[j][1] - x[i][1], x[j][2] - x[i][2]];
+        rot_minus_id(u, w, l2, d)
+    }
+}
+
+/// (R − I) d for the rotation of the quaternion (u, w) scaled by any l > 0, l² = |u|² + w²
+/// given: (2w (u×d) + 2 u×(u×d)) / l² — the unit quaternion's formula without the square
+/// root of its normalisation.
+#[inline]
+fn rot_minus_id(u: [f64; 3], w: f64, l2: f64, d: [f64; 3]) -> V3 {
+    let c = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let ud = c(u, d);
+    let uud = c(u, ud);
+    let f = 2.0 / l2;
+    [
+        f * (w * ud[0] + uud[0]),
+        f * (w * ud[1] + uud[1]),
+        f * (w * ud[2] + uud[2]),
+    ]
+}
+
+/// The (up to three) nodes of skin element `e` at coordinates `x` (unused slots zero).
+#[inline]
+pub(crate) fn skin_points(e: &[u32], x: &[[f64; 3]]) -> [[f64; 3]; 3] {
+    let mut p = [[0.0; 3]; 3];
+    for (q, &v) in p.iter_mut().zip(e) {
+        *q = x[v as usize];
+    }
+    p
+}
+
+/// The size of a skin element: its area (triangle), its length (segment).
+pub(crate) fn element_size(p: &[[f64; 3]]) -> f64 {
+    let v = |a: [f64; 3]| Vector3::from(a);
+    if p.len() >= 3 {
+        0.5 * (v(p[1]) - v(p[0])).cross(&(v(p[2]) - v(p[0]))).norm()
+    } else {
+        (v(p[1]) - v(p[0])).norm()
+    }
+}
+
+/// Unit quaternion [x, y, z, w] of a rotation matrix, with w ≥ 0.
+fn quat(r: &Matrix3<f64>) -> [f64; 4] {
+    if *r == Matrix3::identity() {
+        return [0.0, 0.0, 0.0, 1.0];
+    }
+    let q = UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(*r));
+    let c = q.coords; // (i, j, k, w)
+    let s = if c[3] < 0.0 { -1.0 } else { 1.0 };
+    [s * c[0], s * c[1], s * c[2], s * c[3]]
+}
