@@ -227,3 +227,25 @@ pub(crate) fn springs<'a>(
         wall_len,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_in_case_files_and_on_the_command_line() {
+        for k in Stiffness::ALL {
+            // The case files' spelling: the variant name.
+            let json = serde_json::to_string(&k).unwrap();
+            assert_eq!(json, format!("\"{k:?}\""));
+            assert_eq!(serde_json::from_str::<Stiffness>(&json).unwrap(), k);
+            // The command line's spelling.
+            assert_eq!(k.to_string().parse::<Stiffness>().unwrap(), k);
+        }
+        assert_eq!(
+            serde_json::from_str::<Stiffness>("\"WallDistance\"").unwrap(),
+            Stiffness::WallDistance
+        );
+        assert!("InverseLength".parse::<Stiffness>().is_err());
+    }
+}

@@ -258,7 +258,7 @@ fn slide_on_geometry_supports_from_parametric_msh() {
         r["deform"]["sliding_on_supports"].as_u64().unwrap() > 10,
         "{r}"
     );
-    assert_eq!(r["quality_after"]["inverted"].as_u64(), Some(0));
+    assert_eq!(r["quality_after"]["n_nonpositive"].as_u64(), Some(0));
     // Without --geometry the curved marker is refused as not planar.
     let o = bin()
         .arg("deform")

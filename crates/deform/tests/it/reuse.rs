@@ -214,3 +214,57 @@ fn deformer_to_positions_puts_the_prescribed_nodes_exactly_there() {
     let e = d.deform_to(&positions[1..], None).unwrap_err().to_string();
     assert!(e.contains("positions given"), "{e}");
 }
+
+#[test]
+fn exported_stiffness_matrix_is_the_same_in_any_internal_numbering() {
+    // The spring matrix with the renumbering on and off: the same springs between the same
+    // input nodes (`nodes`), a symmetric M-matrix whose unknowns are the free and sliding
+    // nodes; only the diagonal's sums may differ in their last bits (another order).
+    let m = grid();
+    let b = bc(&m, 1.0);
+    let export = |renumber: bool| {
+        let opts = DeformOptions {
+            renumber,
+            stiffness: Stiffness::WallDistance,
+            ..Default::default()
+        };
+        Deformer::new(&m, &b, &opts)
+            .unwrap()
+            .stiffness_matrix()
+            .unwrap()
+    };
+    let (a, c) = (export(true), export(false));
+    let n = a.nodes.len();
+    assert!(n > 100 && a.matrix.shape() == (n, n) && a.matrix.is_csr());
+    let mut prescribed = vec![false; m.n_nodes()];
+    for &(v, _) in &b.displacements {
+        prescribed[v as usize] = true;
+    }
+    assert!(a.nodes.iter().all(|&v| !prescribed[v as usize]));
+    // Row of each input node in the unrenumbered export.
+    let mut row_of = vec![usize::MAX; m.n_nodes()];
+    for (k, &v) in c.nodes.iter().enumerate() {
+        row_of[v as usize] = k;
+    }
+    assert_eq!(c.matrix.nnz(), a.matrix.nnz());
+    for (k, row) in a.matrix.outer_iterator().enumerate() {
+        let mut off = 0.0;
+        for (l, &v) in row.iter() {
+            let w = *c
+                .matrix
+                .get(row_of[a.nodes[k] as usize], row_of[a.nodes[l] as usize])
+                .expect("same pattern");
+            assert_eq!(a.matrix.get(l, k), Some(&v), "symmetric");
+            if l == k {
+                assert!(v > 0.0);
+                testkit::assert_close!(v, w, rel = 1e-12);
+            } else {
+                assert!(v < 0.0);
+                assert_eq!(v.to_bits(), w.to_bits(), "spring ({k}, {l})");
+                off -= v;
+            }
+        }
+        // a_kk = Σ K over all neighbours ≥ Σ over the unknown ones.
+        assert!(a.matrix.get(k, k).unwrap() >= &(off * (1.0 - 1e-12)));
+    }
+}
