@@ -20,6 +20,7 @@ pub const LAYERS: &[&str] = &[
     "wingmaster",
     "aeroshape",
     "aeroshape-cli",
+    "aeroshape-py",
     "xtask",
 ];
 

@@ -1,0 +1,200 @@
+"""aeroshape.openmdao: a :class:`aeroshape.Study` as an OpenMDAO component.
+
+``Component(case=PATH)`` or ``Component(study=STUDY)``:
+
+- inputs: the study's design variables, one scalar input per variable, by name (physical
+  units), initialised at their initial values; :func:`add_design_vars` offers their bounds
+  and scales to ``add_design_var``;
+- outputs, in MPhys's naming and layout (flattened, C order: x, y, z of node 0, then node 1,
+  ...):
+
+  - ``x_aero0`` -- the wall-node coordinates, ``3 · n_wall`` values, tag
+    ``mphys_coordinates`` (``MPhysVariables.Aerodynamics.Surface.COORDINATES_INITIAL``: the
+    jig shape a geometry component hands to the aerodynamic solver);
+  - ``aero_vol_coords`` -- the volume-grid coordinates, ``3 · n_nodes`` values, tag
+    ``mphys_coupling`` (MPhys names no volume variable; this is DAFoam's MPhys name, ADflow
+    calls its own ``adflow_vol_coords``: rename with the ``volume_output`` option).
+
+  The wall nodes are ``study.wall_nodes`` in increasing order.
+
+Derivatives: the library has no exact derivative products yet, so the component declares
+finite-difference partials (``declare_partials(..., method="fd")``). When
+``Study.jvp``/``Study.vjp`` exist, replace :meth:`Component.setup_partials` by a
+``compute_jacvec_product`` that calls them (see docs/python.md, "Not yet").
+
+:func:`add_linear_constraints` adds the study's linear inequalities ``a @ x <= b`` to a
+group as one linear constraint with exact (constant) partials.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+import openmdao.api as om  # type: ignore[import-untyped]
+
+from ._native import Evaluation, Study
+
+__all__ = [
+    "WALL_OUTPUT",
+    "VOLUME_OUTPUT",
+    "Component",
+    "LinearConstraints",
+    "add_design_vars",
+    "add_linear_constraints",
+]
+
+#: MPhys's name of the aerodynamic surface coordinates (jig shape).
+WALL_OUTPUT = "x_aero0"
+#: The volume-grid coordinates (DAFoam's MPhys name; MPhys defines none).
+VOLUME_OUTPUT = "aero_vol_coords"
+
+
+def _study(case: str | os.PathLike[str] | None, study: Study | None) -> Study:
+    if study is not None and case is None:
+        return study
+    if case is not None and study is None:
+        return Study(case)
+    raise ValueError("give exactly one of case=PATH or study=STUDY")
+
+
+class Component(om.ExplicitComponent):  # type: ignore[misc]
+    """A study as an explicit component (see the module doc).
+
+    Options: ``case`` or ``study`` (exactly one); ``wall_output`` and ``volume_output``
+    (output names; ``volume_output=None`` leaves the volume grid out); ``warm_start``
+    (default False: every evaluation starts its solves from the baseline, so outputs are a
+    function of the inputs alone, which finite differences need); ``fd_step`` and
+    ``fd_form`` (the finite-difference partials: the step of each variable is ``fd_step``
+    times its scale; the default 1e-3 stays well above the chain's round-off, whose noise
+    in the wall coordinates is about 1e-11 of the model size, and well below the
+    curvature's scale).
+
+    Evaluations accept infeasible and out-of-bounds design vectors (a finite-difference
+    step at a bound leaves it): the driver enforces bounds and constraints.
+    """
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self._aeroshape: Study | None = None
+        #: The last evaluation made by ``compute``.
+        self.last_evaluation: Evaluation | None = None
+
+    def initialize(self) -> None:
+        self.options.declare("case", default=None, types=(str, os.PathLike), allow_none=True,
+                             desc="case file (CASE.ron) of the study")
+        self.options.declare("study", default=None, types=Study, allow_none=True,
+                             recordable=False, desc="an aeroshape.Study built already")
+        self.options.declare("wall_output", default=WALL_OUTPUT, types=str,
+                             desc="name of the flattened wall-node coordinates")
+        self.options.declare("volume_output", default=VOLUME_OUTPUT, types=str,
+                             allow_none=True,
+                             desc="name of the flattened volume-grid coordinates (None: none)")
+        self.options.declare("warm_start", default=False, types=bool,
+                             desc="start each evaluation's solves from the previous solution")
+        self.options.declare("fd_step", default=1e-3, types=float,
+                             desc="finite-difference step of each design variable, in units of "
+                                  "its scale")
+        self.options.declare("fd_form", default="central", values=("forward", "backward", "central"),
+                             desc="form of the finite-difference partials")
+
+    @property
+    def study(self) -> Study:
+        """The study (built from ``case`` at set-up)."""
+        if self._aeroshape is None:
+            self._aeroshape = _study(self.options["case"], self.options["study"])
+        return self._aeroshape
+
+    def setup(self) -> None:
+        study = self.study
+        self._names = study.names
+        for dv in study.design_variables:
+            self.add_input(dv.name, val=dv.initial, desc=f"design variable ({dv.modifier})")
+        wall = study.baseline_coordinates[study.wall_nodes]
+        self.add_output(self.options["wall_output"], val=wall.ravel(),
+                        desc="wall-node coordinates, x y z per node", tags=["mphys_coordinates"])
+        if self.options["volume_output"] is not None:
+            self.add_output(self.options["volume_output"], val=study.baseline_coordinates.ravel(),
+                            desc="volume-grid coordinates, x y z per node", tags=["mphys_coupling"])
+
+    def setup_partials(self) -> None:
+        # Finite differences until the library has exact products (docs/python.md, "Not yet").
+        for dv in self.study.design_variables:
+            self.declare_partials(of="*", wrt=dv.name, method="fd",
+                                  step=self.options["fd_step"] * dv.scale,
+                                  form=self.options["fd_form"], step_calc="abs")
+
+    def design_vector(self, inputs: Any) -> np.ndarray:
+        """The design vector (study order) from the component's inputs."""
+        return np.array([inputs[n][0] for n in self._names], dtype=np.float64)
+
+    def compute(self, inputs: Any, outputs: Any) -> None:
+        study = self.study
+        if not self.options["warm_start"]:
+            study.forget_warm_start()
+        ev = study.evaluate(self.design_vector(inputs), allow_infeasible=True,
+                            allow_out_of_bounds=True)
+        outputs[self.options["wall_output"]] = ev.wall_coordinates.ravel()
+        if self.options["volume_output"] is not None:
+            outputs[self.options["volume_output"]] = ev.volume_coordinates.ravel()
+        self.last_evaluation = ev
+
+
+def add_design_vars(group: om.Group, study: Study, *, prefix: str = "",
+                    scaled: bool = True) -> list[str]:
+    """Adds every design variable of ``study`` to ``group`` as a design variable named
+    ``prefix + name`` (its promoted input), with its bounds and, if ``scaled``,
+    ``ref = scale`` (the driver sees ``value / scale``). Returns the names added."""
+    names = []
+    for dv in study.design_variables:
+        name = prefix + dv.name
+        group.add_design_var(name, lower=dv.lower, upper=dv.upper,
+                             ref=dv.scale if scaled else None)
+        names.append(name)
+    return names
+
+
+class LinearConstraints(om.ExplicitComponent):  # type: ignore[misc]
+    """``g = a @ x`` for the linear constraints of a study (inputs: the design variables by
+    name), with exact constant partials; :func:`add_linear_constraints` adds it."""
+
+    def initialize(self) -> None:
+        self.options.declare("study", types=Study, recordable=False)
+
+    def setup(self) -> None:
+        study = self.options["study"]
+        c = study.constraints
+        self._names = c.variables
+        self._a = c.a
+        for dv in study.design_variables:
+            self.add_input(dv.name, val=dv.initial)
+        self.add_output("g", val=self._a @ study.initial, desc="a @ x, one per constraint: "
+                        + ", ".join(c.names))
+
+    def setup_partials(self) -> None:
+        for j, name in enumerate(self._names):
+            rows = np.flatnonzero(self._a[:, j])
+            if rows.size:  # sparse: only the non-zero coefficients
+                self.declare_partials("g", name, rows=rows, cols=np.zeros_like(rows),
+                                      val=self._a[rows, j])
+
+    def compute(self, inputs: Any, outputs: Any) -> None:
+        x = np.array([inputs[n][0] for n in self._names], dtype=np.float64)
+        outputs["g"] = self._a @ x
+
+
+def add_linear_constraints(group: om.Group, study: Study, *, name: str = "shape_constraints",
+                           prefix: str = "") -> str | None:
+    """Adds the linear constraints ``a @ x <= b`` of ``study`` to ``group``: a
+    :class:`LinearConstraints` subsystem ``name`` whose inputs are promoted to
+    ``prefix + variable`` (so they share the design variables' promoted inputs) and one
+    constraint ``name + ".g"`` with ``upper = b`` and ``linear=True``. Call it before
+    ``setup``. Returns the constraint's name, or None when the study has no constraint."""
+    c = study.constraints
+    if len(c) == 0:
+        return None
+    group.add_subsystem(name, LinearConstraints(study=study),
+                        promotes_inputs=[(v, prefix + v) for v in c.variables])
+    group.add_constraint(f"{name}.g", upper=c.b, linear=True)
+    return f"{name}.g"

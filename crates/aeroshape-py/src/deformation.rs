@@ -1,0 +1,310 @@
+//! `deform(mesh, ...)`: the volume deformation of `aeroshape deform` (paper §4) with the
+//! program's options as keywords, each flag's name with `-` → `_` (`--rotate-deg A` →
+//! `rotate_deg=A`, `--no-rotation` → `no_rotation=True`); the same defaults, the same
+//! choice between sliding on a plane and on the geometry's supports, the same messages.
+//!
+//! Per-node displacements (`--displacements FILE.csv` on the command line) are given as
+//! arrays: `displacements=(nodes, d)` with `nodes` (k,) node indices and `d` (k × 3), or a
+//! mapping `{node: (dx, dy, dz)}`.
+
+use std::collections::HashSet;
+use std::path::PathBuf;
+
+use ::deform::{BoundaryConditions, DeformOptions, MarkerRole, RigidMotion, SolverKind, Stiffness};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+use crate::arrays;
+use crate::errors::{self, Kind};
+use crate::grid::PyMesh;
+use crate::progress::{self, Progress};
+
+/// The result of `deform`: the deformed grid and what the solver did.
+#[pyclass(frozen, module = "aeroshape._native", name = "Deformation")]
+pub struct PyDeformation {
+    mesh: Py<PyMesh>,
+    /// Node coordinates of the deformed grid (`n × 3`).
+    #[pyo3(get)]
+    coordinates: Py<PyAny>,
+    /// Signed quality of every cell of the deformed grid (the field the guard checked).
+    #[pyo3(get)]
+    cell_quality: Py<PyAny>,
+    /// The solver's report (the `deform` object of `aeroshape deform --report`).
+    #[pyo3(get)]
+    report: Py<PyAny>,
+}
+
+#[pymethods]
+impl PyDeformation {
+    /// The deformed grid: the input's cells, markers and numbering with the new coordinates
+    /// (nodes that slid on supports carry their new parameters).
+    #[getter]
+    fn mesh(&self, py: Python<'_>) -> Py<PyMesh> {
+        self.mesh.clone_ref(py)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let it = |k: &str| {
+            self.report
+                .bind(py)
+                .get_item(k)
+                .map(|v| v.to_string())
+                .unwrap_or_default()
+        };
+        format!(
+            "Deformation({} iterations, residual {}, {} increments)",
+            it("iterations"),
+            it("residual"),
+            it("increments")
+        )
+    }
+}
+
+fn solver(name: &str) -> PyResult<SolverKind> {
+    Ok(match name {
+        "pcg" => SolverKind::PcgMultigrid,
+        "jacobi" => SolverKind::PointIteration,
+        "pcg-jacobi" => SolverKind::PcgJacobi,
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "solver {name:?}: use \"pcg\", \"jacobi\" or \"pcg-jacobi\""
+            )));
+        }
+    })
+}
+
+fn stiffness(name: &str) -> PyResult<Stiffness> {
+    Ok(match name {
+        "inverse-length" => Stiffness::InverseLength,
+        "inverse-length2" => Stiffness::InverseLengthSquared,
+        "volume" => Stiffness::Volume,
+        "wall-distance" => Stiffness::WallDistance,
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "stiffness {name:?}: use \"inverse-length\", \"inverse-length2\", \"volume\" or \"wall-distance\""
+            )));
+        }
+    })
+}
+
+/// The `displacements` argument: `(nodes, d)` or `{node: (dx, dy, dz)}`; checked as the
+/// command line checks its CSV file (nodes exist, given once, finite values).
+fn displacements(obj: &Bound<'_, PyAny>, n_nodes: usize) -> PyResult<Vec<(u32, [f64; 3])>> {
+    let pairs: Vec<(i64, [f64; 3])> = if let Ok(d) = obj.cast::<PyDict>() {
+        d.iter()
+            .map(|(k, v)| -> PyResult<(i64, [f64; 3])> {
+                let node: i64 = k.extract()?;
+                let d = arrays::read_vector(&v, &format!("displacements[{node}]"))?;
+                let d: [f64; 3] = d.try_into().map_err(|_| {
+                    PyValueError::new_err(format!("displacements[{node}]: expected (dx, dy, dz)"))
+                })?;
+                Ok((node, d))
+            })
+            .collect::<PyResult<_>>()?
+    } else if let Ok(t) = obj.cast::<PyTuple>()
+        && t.len() == 2
+    {
+        let nodes = arrays::read_vector(&t.get_item(0)?, "displacements nodes")?;
+        let d = arrays::read_rows::<3>(&t.get_item(1)?, "displacements values")?;
+        if nodes.len() != d.len() {
+            return Err(PyValueError::new_err(format!(
+                "displacements: {} nodes for {} displacements",
+                nodes.len(),
+                d.len()
+            )));
+        }
+        let mut out = Vec::with_capacity(nodes.len());
+        for (&n, d) in nodes.iter().zip(d) {
+            if n.fract() != 0.0 {
+                return Err(PyValueError::new_err(format!(
+                    "displacements: bad node index {n}"
+                )));
+            }
+            out.push((n as i64, d));
+        }
+        out
+    } else {
+        return Err(PyValueError::new_err(
+            "displacements: expected (nodes, d) or {node: (dx, dy, dz)}",
+        ));
+    };
+    let mut seen = HashSet::new();
+    let mut out = Vec::with_capacity(pairs.len());
+    for (node, d) in pairs {
+        if node < 0 || node as usize >= n_nodes {
+            return Err(PyValueError::new_err(format!(
+                "displacements: node {node} does not exist (the grid has {n_nodes} nodes)"
+            )));
+        }
+        if d.iter().any(|x| !x.is_finite()) {
+            return Err(PyValueError::new_err(format!(
+                "displacements: node {node}: bad displacement {d:?}"
+            )));
+        }
+        if !seen.insert(node) {
+            return Err(PyValueError::new_err(format!(
+                "displacements: node {node} given twice"
+            )));
+        }
+        out.push((node as u32, d));
+    }
+    Ok(out)
+}
+
+fn vec3(v: [f64; 3], what: &str) -> PyResult<[f64; 3]> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(v)
+    } else {
+        Err(PyValueError::new_err(format!(
+            "{what}: {v:?} is not three finite numbers"
+        )))
+    }
+}
+
+/// Deforms a volume grid from prescribed boundary motion (spring analogy with adaptation
+/// matrices R, paper Eqs. 14–26); the GIL is released while it runs. See the module doc and
+/// docs/python.md for the keywords.
+#[pyfunction]
+#[pyo3(name = "deform", signature = (
+    mesh, *, rigid=Vec::new(), rotate_deg=0.0, axis_point=[0.0, 0.0, 0.0],
+    axis_dir=[0.0, 0.0, 1.0], translate=[0.0, 0.0, 0.0], displacements=None,
+    slide=Vec::new(), geometry=None, fixed=Vec::new(), solver="pcg",
+    stiffness="inverse-length2", no_rotation=false, tolerance=1e-8, allow_inverted=false,
+    progress=None
+), text_signature = "(mesh, *, rigid=(), rotate_deg=0.0, axis_point=(0.0, 0.0, 0.0), \
+    axis_dir=(0.0, 0.0, 1.0), translate=(0.0, 0.0, 0.0), displacements=None, slide=(), \
+    geometry=None, fixed=(), solver='pcg', stiffness='inverse-length2', no_rotation=False, \
+    tolerance=1e-08, allow_inverted=False, progress=None)")]
+pub fn deform_mesh(
+    py: Python<'_>,
+    mesh: PyRef<'_, PyMesh>,
+    rigid: Vec<String>,
+    rotate_deg: f64,
+    axis_point: [f64; 3],
+    axis_dir: [f64; 3],
+    translate: [f64; 3],
+    displacements: Option<Bound<'_, PyAny>>,
+    slide: Vec<String>,
+    geometry: Option<PathBuf>,
+    fixed: Vec<String>,
+    solver: &str,
+    stiffness: &str,
+    no_rotation: bool,
+    tolerance: f64,
+    allow_inverted: bool,
+    progress: Option<Bound<'_, PyAny>>,
+) -> PyResult<PyDeformation> {
+    let m = &mesh.inner;
+    if rigid.is_empty() && (rotate_deg != 0.0 || translate != [0.0; 3]) {
+        return Err(PyValueError::new_err(
+            "rotate_deg/translate need a marker to move: give rigid=[MARKER]",
+        ));
+    }
+    if !rotate_deg.is_finite() {
+        return Err(PyValueError::new_err(format!(
+            "rotate_deg: {rotate_deg} is not a finite number"
+        )));
+    }
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "tolerance: {tolerance} must be a positive number"
+        )));
+    }
+    let kind = self::solver(solver)?;
+    let motion = RigidMotion {
+        angle_deg: rotate_deg,
+        axis_point: vec3(axis_point, "axis_point")?,
+        axis_dir: vec3(axis_dir, "axis_dir")?,
+        translation: vec3(translate, "translate")?,
+    };
+    let displacements = match &displacements {
+        Some(d) => self::displacements(d, m.n_nodes())?,
+        None => Vec::new(),
+    };
+    let opts = DeformOptions {
+        solver: kind,
+        stiffness: self::stiffness(stiffness)?,
+        adapt_rotation: !no_rotation,
+        rel_tol: tolerance,
+        max_iters: if kind == SolverKind::PointIteration {
+            200_000
+        } else {
+            20_000
+        },
+        allow_inverted,
+        ..Default::default()
+    };
+    let mut prog = Progress::new(py, "deform", progress)?;
+    let result = py.detach(|| -> Result<_, (Kind, String)> {
+        let geometry = match &geometry {
+            Some(p) => {
+                let text = std::fs::read_to_string(p)
+                    .map_err(|e| (Kind::Geometry, format!("{}: {e}", p.display())))?;
+                Some(
+                    geom_db::GeomDb::from_ron_str(&text, &p.display().to_string())
+                        .map_err(|e| (Kind::Geometry, errors::one_line(&e)))?,
+                )
+            }
+            None => None,
+        };
+        let supports = match &geometry {
+            Some(db) => Some(
+                ::deform::Supports::from_classes(m, db)
+                    .map_err(|e| (Kind::Deform, errors::one_line(&e)))?,
+            ),
+            None => None,
+        };
+        let mut markers: Vec<(String, MarkerRole)> = rigid
+            .iter()
+            .map(|r| (r.clone(), MarkerRole::Rigid(motion)))
+            .collect();
+        for s in &slide {
+            let classified = |sp: &::deform::Supports| {
+                let on: HashSet<u32> = sp.nodes.iter().map(|e| e.0).collect();
+                m.marker(s)
+                    .is_some_and(|mk| mk.elements.node_set().iter().all(|v| on.contains(v)))
+            };
+            let role = match &supports {
+                Some(sp) if classified(sp) => MarkerRole::SlideOnSupport,
+                _ => MarkerRole::SlidePlane,
+            };
+            markers.push((s.clone(), role));
+        }
+        markers.extend(fixed.iter().map(|f| (f.clone(), MarkerRole::Fixed)));
+        let bc = BoundaryConditions {
+            markers,
+            displacements,
+        };
+        let mut report = |phase: &str, done: usize, total: usize| prog.report(phase, done, total);
+        let d = match &supports {
+            Some(sp) => ::deform::deform_on_supports_with_progress(m, &bc, sp, &opts, &mut report),
+            None => ::deform::deform_with_progress(m, &bc, &opts, &mut report),
+        }
+        .map_err(|e| (Kind::Deform, errors::one_line(&e)))?;
+        let mut out = m.clone();
+        out.coords = d.coords.clone();
+        if let Some(classes) = out.classes.as_mut() {
+            for &(v, s) in &d.supports {
+                let c = &mut classes[v as usize];
+                match s {
+                    ::deform::Support::Curve { t, .. } => c.param = [t, 0.0],
+                    ::deform::Support::Surface { uv, .. } => c.param = uv,
+                    ::deform::Support::Corner => {}
+                }
+            }
+        }
+        Ok((out, d))
+    });
+    prog.finish()?;
+    let (out, d) = result.map_err(|(k, msg)| errors::raise(py, k, msg))?;
+    for note in &d.report.notes {
+        progress::log(py, "INFO", || format!("note: {note}"))?;
+    }
+    Ok(PyDeformation {
+        coordinates: arrays::coords(py, &out.coords).into_any().unbind(),
+        cell_quality: arrays::vector(py, &d.cell_quality).into_any().unbind(),
+        report: arrays::to_python(py, &d.report)?.unbind(),
+        mesh: Py::new(py, PyMesh::from_rust(out))?,
+    })
+}
