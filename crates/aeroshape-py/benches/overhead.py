@@ -7,6 +7,9 @@ In one process, alternating, each repetition times:
   numpy copies of the volume and wall coordinates and the report dict;
 - **rust**: the library's `Study::evaluate(x)` alone, timed in Rust (`_rust_evaluate_seconds`).
 
+It also prints the time each Python call spends outside the chain's own timer (the report's
+`seconds`), which a loaded machine disturbs least.
+
 Every evaluation starts cold (`forget_warm_start()`, not timed), so both do the same solver
 work; the design vector alternates between dv.ron and a nearby vector. Prints the medians, the
 overhead of the medians and the median of the per-pair ratios.
@@ -62,6 +65,11 @@ def main() -> None:
     print(f"python Study.evaluate   median {mp * 1e3:8.3f} ms  (min {min(py_t) * 1e3:.3f})")
     print(f"rust   Study::evaluate  median {mr * 1e3:8.3f} ms  (min {min(rs_t) * 1e3:.3f})")
     print(f"  (the chain's own time inside the python calls: median {mi * 1e3:.3f} ms)")
+    extra = sorted(p - i for p, i in zip(py_t, inner_t))
+    print(f"python-side time per call (call minus the chain's own timer): median "
+          f"{statistics.median(extra) * 1e6:.1f} us, quartiles {extra[len(extra) // 4] * 1e6:.1f} "
+          f".. {extra[3 * len(extra) // 4] * 1e6:.1f} us = {100 * statistics.median(extra) / mr:.2f} % "
+          f"of the rust median")
     print(f"overhead of the medians: {100 * (mp / mr - 1):+.2f} %")
     print(f"per-pair ratio python/rust: median {statistics.median(ratios):.4f}, "
           f"quartiles {ratios[len(ratios) // 4]:.4f} .. {ratios[3 * len(ratios) // 4]:.4f}")

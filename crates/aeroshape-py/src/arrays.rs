@@ -7,6 +7,7 @@ use numpy::ndarray::{ArrayView1, ArrayView2};
 use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
 use pyo3::types::PyDict;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -113,9 +114,10 @@ pub fn read_connectivity(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<u3
 /// A Python value (dict, list, number, string) from a serialisable Rust value, through JSON
 /// (`json.loads`), so that it reads exactly as the command line's JSON files do.
 pub fn to_python<'py>(py: Python<'py>, value: &impl Serialize) -> PyResult<Bound<'py, PyAny>> {
+    static LOADS: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
     let text =
         serde_json::to_string(value).map_err(|e| PyValueError::new_err(format!("json: {e}")))?;
-    py.import("json")?.call_method1("loads", (text,))
+    LOADS.import(py, "json", "loads")?.call1((text,))
 }
 
 /// A Rust value from a Python value (dict, list, number, string), through JSON

@@ -299,7 +299,7 @@ pub fn deform_mesh(
     prog.finish()?;
     let (out, d) = result.map_err(|(k, msg)| errors::raise(py, k, msg))?;
     for note in &d.report.notes {
-        progress::log(py, "INFO", || format!("note: {note}"))?;
+        progress::log(py, progress::INFO, || format!("note: {note}"))?;
     }
     Ok(PyDeformation {
         coordinates: arrays::coords(py, &out.coords).into_any().unbind(),

@@ -251,7 +251,7 @@ pub fn read_mesh(py: Python<'_>, path: PathBuf) -> PyResult<PyMesh> {
         .detach(|| mesh::io::read_path(&path))
         .map_err(|e| errors::from_error(py, Kind::Mesh, &e))?;
     for w in &m.warnings {
-        progress::log(py, "WARNING", || w.clone())?;
+        progress::log(py, progress::WARNING, || w.clone())?;
     }
     Ok(PyMesh::from_rust(m))
 }

@@ -4,9 +4,20 @@
 //! exception is raised when the computation ends.
 
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
 
 /// The name of the package's logger.
 pub const LOGGER: &str = "aeroshape";
+
+/// `logging.DEBUG`, `INFO`, `WARNING` (fixed by the `logging` module).
+pub const DEBUG: u8 = 10;
+/// `logging.INFO`.
+pub const INFO: u8 = 20;
+/// `logging.WARNING`.
+pub const WARNING: u8 = 30;
+
+/// The logger, fetched once (an import per call costs tens of microseconds).
+static THE_LOGGER: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
 
 /// Where the progress of one computation goes; see the module doc.
 pub struct Progress {
@@ -26,7 +37,7 @@ impl Progress {
     ) -> PyResult<Self> {
         let logger = match &callback {
             Some(_) => None,
-            None => enabled_logger(py, "DEBUG")?,
+            None => enabled_logger(py, DEBUG)?,
         };
         Ok(Self {
             task,
@@ -66,20 +77,23 @@ impl Progress {
     }
 }
 
-/// The logger `"aeroshape"` if it is enabled for `level` (`"DEBUG"`, `"INFO"`, ...).
-fn enabled_logger(py: Python<'_>, level: &str) -> PyResult<Option<Py<PyAny>>> {
-    let logging = py.import("logging")?;
-    let logger = logging.call_method1("getLogger", (LOGGER,))?;
-    let lv = logging.getattr(level)?;
-    let on: bool = logger.call_method1("isEnabledFor", (lv,))?.extract()?;
-    Ok(on.then(|| logger.unbind()))
+/// The logger `"aeroshape"` if it is enabled for `level` ([`DEBUG`], [`INFO`], [`WARNING`]).
+fn enabled_logger(py: Python<'_>, level: u8) -> PyResult<Option<Py<PyAny>>> {
+    let logger = THE_LOGGER.get_or_try_init(py, || {
+        py.import("logging")?
+            .call_method1("getLogger", (LOGGER,))
+            .map(Bound::unbind)
+    })?;
+    let on: bool = logger
+        .call_method1(py, "isEnabledFor", (level,))?
+        .extract(py)?;
+    Ok(on.then(|| logger.clone_ref(py)))
 }
 
-/// Logs `message` to the logger `"aeroshape"` at `level` (`"INFO"`, `"WARNING"`, ...).
-pub fn log(py: Python<'_>, level: &str, message: impl FnOnce() -> String) -> PyResult<()> {
+/// Logs `message` to the logger `"aeroshape"` at `level` ([`INFO`], [`WARNING`], ...).
+pub fn log(py: Python<'_>, level: u8, message: impl FnOnce() -> String) -> PyResult<()> {
     if let Some(logger) = enabled_logger(py, level)? {
-        let method = level.to_ascii_lowercase();
-        logger.call_method1(py, method.as_str(), (message(),))?;
+        logger.call_method1(py, "log", (level, message()))?;
     }
     Ok(())
 }

@@ -22,6 +22,7 @@ use mesh::io::Format;
 use numpy::PyArray2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
 use serde::Serialize;
 
 use crate::arrays;
@@ -184,7 +185,7 @@ impl PyStudy {
             ));
         }
         for v in &violations {
-            progress::log(py, "WARNING", || v.to_string())?;
+            progress::log(py, progress::WARNING, || v.to_string())?;
         }
         Ok(())
     }
@@ -287,7 +288,7 @@ impl PyStudy {
     /// update seeds, wall classification, volume-deformation set-up).
     #[new]
     fn new(py: Python<'_>, case_path: PathBuf) -> PyResult<Self> {
-        progress::log(py, "INFO", || {
+        progress::log(py, progress::INFO, || {
             format!("building the study from {}", case_path.display())
         })?;
         let study = py
@@ -312,7 +313,7 @@ impl PyStudy {
             .map(|(i, _)| i as u32)
             .collect();
         let s = study.setup_report();
-        progress::log(py, "INFO", || {
+        progress::log(py, progress::INFO, || {
             format!(
                 "grid {} nodes, {} cells, {} wall nodes (classified, max distance {:.2e}); set-up {:.2} s",
                 s.nodes,
@@ -481,7 +482,7 @@ impl PyStudy {
             x: arrays::vector(py, &x).into_any().unbind(),
             volume_coordinates: arrays::coords(py, &ev.grid.coords).into_any().unbind(),
             wall_coordinates: arrays::coords(py, &wall).into_any().unbind(),
-            report: arrays::to_python(py, &ev.report)?.unbind(),
+            report: PyOnceLock::new(),
             inner: Arc::new(ev),
         })
     }
@@ -493,7 +494,9 @@ impl PyStudy {
         let study = &self.inner;
         py.detach(|| {
             let t = std::time::Instant::now();
-            study.evaluate(&x).map(|_| t.elapsed().as_secs_f64())
+            let ev = study.evaluate(&x)?;
+            drop(ev); // as the Python path drops the evaluation it replaces
+            Ok(t.elapsed().as_secs_f64())
         })
         .map_err(|e| errors::from_study(py, &e))
     }
@@ -535,7 +538,8 @@ impl PyStudy {
 }
 
 /// The result of `Study.evaluate`: numpy arrays of its own (copies made at return) and the
-/// report.
+/// report (a dict made on first access: an optimiser that never reads it does not pay for
+/// it).
 #[pyclass(frozen, module = "aeroshape._native", name = "Evaluation")]
 pub struct PyEvaluation {
     study: Py<PyStudy>,
@@ -549,13 +553,23 @@ pub struct PyEvaluation {
     /// Coordinates of the wall nodes (`Study.wall_nodes` rows of `volume_coordinates`).
     #[pyo3(get)]
     wall_coordinates: Py<PyAny>,
-    /// What the evaluation did (the `evaluation` object of `report.json`).
-    #[pyo3(get)]
-    report: Py<PyAny>,
+    /// The report as a dict, made on first access.
+    report: PyOnceLock<Py<PyAny>>,
 }
 
 #[pymethods]
 impl PyEvaluation {
+    /// What the evaluation did (the `evaluation` object of `report.json`), a dict made on
+    /// first access (and the same object afterwards).
+    #[getter]
+    fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.report
+            .get_or_try_init(py, || {
+                arrays::to_python(py, &self.inner.report).map(Bound::unbind)
+            })
+            .map(|r| r.bind(py).clone())
+    }
+
     /// The study evaluated.
     #[getter]
     fn study(&self, py: Python<'_>) -> Py<PyStudy> {
@@ -587,15 +601,11 @@ impl PyEvaluation {
         self.study.get().write(py, out_dir, self, formats)
     }
 
-    fn __repr__(&self, py: Python<'_>) -> String {
-        let n = self.inner.grid.n_nodes();
-        let q = self
-            .report
-            .bind(py)
-            .get_item("quality_after")
-            .and_then(|q| q.get_item("min"))
-            .map(|m| m.to_string())
-            .unwrap_or_default();
-        format!("Evaluation({n} nodes, min quality {q})")
+    fn __repr__(&self) -> String {
+        format!(
+            "Evaluation({} nodes, min quality {})",
+            self.inner.grid.n_nodes(),
+            self.inner.report.quality_after.min
+        )
     }
 }

@@ -38,7 +38,7 @@ def cli() -> Path:
         return p
     found = [p for p in (ROOT / "target" / d / "aeroshape" for d in ("debug", "release")) if p.is_file()]
     if not found:
-        _missing("the aeroshape program (cargo build -p aeroshape)")
+        _missing("the aeroshape program (cargo build -p aeroshape-cli)")
     return max(found, key=lambda p: p.stat().st_mtime)
 
 

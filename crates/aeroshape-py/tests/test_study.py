@@ -47,6 +47,7 @@ def test_evaluate_is_aeroshape_run_bit_for_bit(cli, tmp_path):
     assert ev.report["design"] == rep["design"]
     assert ev.report["quality_after"] == rep["quality_after"]
     assert ev.report["deform"]["iterations"] == rep["deform"]["iterations"]
+    assert ev.report is ev.report  # made once, on first access
 
 
 def test_initial_vector_gives_the_baseline(study):
