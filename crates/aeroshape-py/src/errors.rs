@@ -49,17 +49,23 @@ impl Kind {
     }
 }
 
-/// The command line's one-line message of an error: the error, then each cause after `: `
-/// (anyhow's `{:#}`), with runs of white space collapsed to one space.
+/// The command line's one-line message of an error (as `aeroshape-cli` prints it): the error,
+/// then each cause after `: `, white space collapsed, a cause whose message the line already
+/// holds left out.
 pub fn one_line(e: &(dyn StdError + 'static)) -> String {
-    let mut s = e.to_string();
-    let mut source = e.source();
-    while let Some(c) = source {
-        s.push_str(": ");
-        s.push_str(&c.to_string());
-        source = c.source();
+    let mut line = String::new();
+    let mut cause: Option<&(dyn StdError + 'static)> = Some(e);
+    while let Some(c) = cause {
+        let msg = collapse(&c.to_string());
+        if !msg.is_empty() && !line.contains(&msg) {
+            if !line.is_empty() {
+                line.push_str(": ");
+            }
+            line.push_str(&msg);
+        }
+        cause = c.source();
     }
-    collapse(&s)
+    line
 }
 
 /// `s` with runs of white space collapsed to one space, as the command line prints.
@@ -88,11 +94,21 @@ pub fn from_error(py: Python<'_>, kind: Kind, e: &(dyn StdError + 'static)) -> P
     raise(py, kind, one_line(e))
 }
 
-/// The exception of an error of [`aeroshape::study`] (building or evaluating a study).
+/// The exception of an error of [`aeroshape::study`] (building or evaluating a study): the
+/// grid → `MeshError`, the geometry → `GeometryError`, a bad design vector →
+/// `DesignVectorError`, a phase of an evaluation → `EvaluationError`, anything else of the
+/// case and its set-up → `CaseError`.
 pub fn from_study(py: Python<'_>, e: &aeroshape::study::StudyError) -> PyErr {
     use aeroshape::study::StudyError as E;
     let kind = match e {
-        E::Phase { .. } => Kind::Evaluation,
+        E::Grid(_) => Kind::Mesh,
+        E::Geometry(_) => Kind::Geometry,
+        E::Param(
+            param::Error::VectorLength { .. }
+            | param::Error::OutOfBounds { .. }
+            | param::Error::UnknownVariable { .. },
+        ) => Kind::DesignVector,
+        E::ModelUpdate(_) | E::SurfaceGrid(_) | E::Deform(_) => Kind::Evaluation,
         _ => Kind::Case,
     };
     from_error(py, kind, e)

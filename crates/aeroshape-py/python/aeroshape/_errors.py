@@ -24,8 +24,9 @@ class AeroshapeError(Exception):
 
 
 class CaseError(AeroshapeError):
-    """The case file, or a file it names, is missing or bad, or the case does not fit its
-    grid or geometry (e.g. a wall marker missing from the grid)."""
+    """The case file is missing or bad, or the case does not fit its grid or geometry (e.g. a
+    wall marker missing from the grid); a bad grid or geometry file it names raises
+    :class:`MeshError` or :class:`GeometryError`."""
 
 
 class DesignVectorError(AeroshapeError, ValueError):
