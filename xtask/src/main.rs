@@ -1,6 +1,7 @@
 //! Project automation (`cargo xtask <task>`), in the manner of rust-analyzer's xtask.
 //!
-//! Tasks: `ci` (fmt, clippy, tests, docs), `tidy` (layering and file-header rules),
+//! Tasks: `ci` (fmt, clippy, tests, docs), `tidy` (the architecture invariants: layering,
+//! geometry and grid, no environment in libraries, file length and headers, commit subjects),
 //! `fixtures` (geometry fixtures and the chain cases' volume grids), `chain` (the default
 //! case end to end), `regress` (references, ignored tests, round trips), `bench`.
 
@@ -24,7 +25,7 @@ fn main() -> ExitCode {
         Some("bench") => bench::run(&root(), &args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check crate layering and file headers\n  fixtures [--geometry-only]  write the geometry fixtures (fixtures/geom/) and the chain cases' volume grids (needs pip gmsh)\n  chain  run the default case (fixtures/cases/default) into target/chain/ and print a summary\n  regress [--bless] [--skip-ignored-tests]  chain cases against fixtures/reference/, ignored tests, meshio/Gmsh round trips\n  bench [--quick] [CRATE]...  criterion benchmarks of the crates, summary in target/bench/summary.md"
+                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check the architecture invariants (ARCHITECTURE.md)\n  fixtures [--geometry-only]  write the geometry fixtures (fixtures/geom/) and the chain cases' volume grids (needs pip gmsh)\n  chain  run the default case (fixtures/cases/default) into target/chain/ and print a summary\n  regress [--bless] [--skip-ignored-tests]  chain cases against fixtures/reference/, ignored tests, meshio/Gmsh round trips\n  bench [--quick] [CRATE]...  criterion benchmarks of the crates, summary in target/bench/summary.md"
             );
             return ExitCode::from(2);
         }
