@@ -24,7 +24,9 @@ use geom_db::prelude::{Matrix3, Point3, Vector3};
 use geom_db::{
     Arc, CheckOptions, CornerId, CurveCompId, CurveComponent, CurveId, GeomDb, Orientation,
     OrientedCurve, Patch, Side, SupportCurve, SupportSurface, SurfaceComponent, SurfaceId,
-    eval::ParamSurface, merge::PointMerger,
+    eval::ParamSurface,
+    merge::PointMerger,
+    newton::{Eval, Problem, Settings, minimise},
 };
 
 /// Builds all fixtures, checks them and writes them atomically; then (unless
@@ -558,7 +560,37 @@ fn fuselage_point(i: usize, x: f64, j: usize, y: f64) -> Point3 {
     Point3::new(px, r * phi.sin(), -r * phi.cos())
 }
 
-/// Solves wing(u, v) = fuselage(a, b) for (v, a, b) at fixed u by Newton's method.
+/// Eq. (12) at fixed wing u: ½|wing(u, v) − fuselage(a, b)|² in (v, a, b), Gauss–Newton
+/// Hessian JᵀJ, residual |wing − fuselage|.
+struct JunctionProblem<'s> {
+    wing: &'s SupportSurface,
+    fus: &'s SupportSurface,
+    u: f64,
+}
+
+impl Problem<3> for JunctionProblem<'_> {
+    fn eval(&self, x: &[f64; 3], _active: &[bool; 3]) -> Eval<3> {
+        let w = self.wing.derivs(self.u, x[0]);
+        let f = self.fus.derivs(x[1], x[2]);
+        let r = w.point - f.point;
+        let jac = Matrix3::from_columns(&[w.dv, -f.du, -f.dv]);
+        let n = r.norm();
+        Eval {
+            f: if n.is_finite() {
+                0.5 * n * n
+            } else {
+                f64::INFINITY
+            },
+            g: jac.transpose() * r,
+            h: jac.transpose() * jac,
+            res: if n.is_finite() { n } else { f64::INFINITY },
+            fnoise: 16.0 * f64::EPSILON * n * (w.point.coords.norm() + f.point.coords.norm()),
+        }
+    }
+}
+
+/// Solves wing(u, v) = fuselage(a, b) for (v, a, b) at fixed u (geom-db's safeguarded
+/// Newton); returns v and the wing point.
 fn junction_point(
     wing: &SupportSurface,
     fus: &SupportSurface,
@@ -578,27 +610,24 @@ fn junction_point(
         let mid = 0.5 * (lo + hi);
         if g(mid) < 0.0 { lo = mid } else { hi = mid }
     }
-    let mut v = 0.5 * (lo + hi);
+    let v = 0.5 * (lo + hi);
     let p = wing.point(u, v);
-    let mut a = 1.0 + (p.x - NOSE) / MID;
-    let mut b = p.y.atan2(-p.z) / FRAC_PI_2;
-    for _ in 0..50 {
-        let w = wing.derivs(u, v);
-        let f = fus.derivs(a, b);
-        let r = w.point - f.point;
-        if r.norm() <= tol {
-            return Ok((v, w.point));
-        }
-        let jac = Matrix3::from_columns(&[w.dv, -f.du, -f.dv]);
-        let d = jac
-            .lu()
-            .solve(&(-r))
-            .ok_or_else(|| format!("singular junction Jacobian at u = {u}"))?;
-        v += d.x;
-        a += d.y;
-        b += d.z;
+    let a = 1.0 + (p.x - NOSE) / MID;
+    let b = p.y.atan2(-p.z) / FRAC_PI_2;
+    let o = minimise(
+        &JunctionProblem { wing, fus, u },
+        [v, a, b],
+        &[0.0, 0.0, 0.0],
+        &[1.0, 3.0, 2.0],
+        Settings { tol, max_iters: 50 },
+    );
+    if !o.report.converged {
+        return Err(format!(
+            "junction Newton did not converge at u = {u} ({} iterations, |wing − fuselage| = {:e})",
+            o.report.iterations, o.report.residual
+        ));
     }
-    Err(format!("junction Newton did not converge at u = {u}"))
+    Ok((o.x[0], wing.point(u, o.x[0])))
 }
 
 /// The wing-body half model (see the module doc) with `split` junction arcs per chordwise

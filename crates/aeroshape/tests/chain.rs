@@ -50,7 +50,7 @@ fn support_distances(db: &GeomDb, coords: &[[f64; 3]], support: &[NodeSupport]) 
         match *s {
             NodeSupport::Surface { comp, uv } => {
                 let f = proj[comp.index()].project_from(&p, uv);
-                let d = if f.converged {
+                let d = if f.report.converged {
                     f.distance
                 } else {
                     proj[comp.index()].project(&p).unwrap().distance

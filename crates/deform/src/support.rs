@@ -8,10 +8,11 @@
 //! displacement δ in that tangent space; the parameters are updated by Eq. 31 (surfaces:
 //! Δ(u, v) = G⁻¹ [r_u r_v]ᵀ δ with G the first fundamental matrix, Eq. 33) or Eq. 28
 //! (curves: Δt = r′·δ / r′·r′), and the node is then placed on the support at the parameters
-//! of the point nearest to its tentative position x + δ: Eq. 31 is repeated with
-//! RH = (x + δ) − r(u, v) (a Gauss–Newton iteration, safeguarded by step halving and by
-//! clamping to the parameter domain) until the step is below round-off. The node therefore
-//! lies exactly on r(u, v). See [`crate::deform_on_supports`] for the outer iteration that repeats the
+//! of the point nearest to its tentative position x + δ: the foot of the normal (Eq. 11) by
+//! geom-db's point inversion ([`geom_db::invert`]: the shared safeguarded Newton, started at
+//! the node's parameters, bounded to the parameter domain, converged to a tolerance the
+//! caller derives from the model size). The node therefore lies exactly on r(u, v). See
+//! [`crate::deform_on_supports`] for the outer iteration that repeats the
 //! spring solve with the new tangent spaces.
 //!
 //! Node classification from a grid ([`Supports::from_classes`]) follows the convention of
@@ -21,7 +22,11 @@
 //! k − 1 at global parameters (u, v) of its support surface.
 
 use geom_db::eval::{ParamCurve, ParamSurface};
-use geom_db::prelude::{Point3, Vector3};
+use geom_db::invert::{
+    CurveInverter, InvertOptions, SurfaceInverter, foot_on_curve, foot_on_surface,
+};
+use geom_db::newton::{NewtonReport, Settings};
+use geom_db::prelude::Point3;
 use geom_db::{CurveCompId, CurveId, GeomDb, SurfCompId, SurfaceId};
 use mesh::Mesh;
 use serde::Serialize;
@@ -74,8 +79,9 @@ impl<'a> Supports<'a> {
     /// `surfgrid` (module doc): dimension 0 → corner, 1 → curve component tag − 1 on its
     /// support curve, 2 → surface component tag − 1 on its support surface; dimension 3
     /// (volume) nodes are not listed. When the grid carries no parametric coordinates
-    /// (`mesh.parametric == false`), the parameters are found by projecting the node onto
-    /// its support (Newton, seeded by sampling). Errors name the node and the entity.
+    /// (`mesh.parametric == false`), the parameters are the foot of the normal from the node
+    /// on its support (geom-db's point inversion, seeded by sampling, tolerance relative to
+    /// the model size). Errors name the node and the entity.
     pub fn from_classes(mesh: &Mesh, db: &'a GeomDb) -> Result<Self> {
         let Some(classes) = &mesh.classes else {
             return Err(Error::Support {
@@ -85,6 +91,7 @@ impl<'a> Supports<'a> {
             });
         };
         let mut nodes = Vec::new();
+        let mut finders = Finders::new(db);
         for (i, c) in classes.iter().enumerate() {
             let bad = |reason: String| Error::Support {
                 node: Some(i as u32),
@@ -108,7 +115,7 @@ impl<'a> Supports<'a> {
                     let t = if mesh.parametric {
                         c.param[0]
                     } else {
-                        project_curve(db.curve(curve), Vector3::from(mesh.coords[i]), None).0
+                        finders.curve(curve, i, mesh.coords[i]).map_err(bad)?[0]
                     };
                     Support::Curve { curve, t }
                 }
@@ -126,7 +133,7 @@ impl<'a> Supports<'a> {
                     let uv = if mesh.parametric {
                         c.param
                     } else {
-                        project_surface(db.surface(surface), Vector3::from(mesh.coords[i]), None).0
+                        finders.surface(surface, i, mesh.coords[i]).map_err(bad)?
                     };
                     Support::Surface { surface, uv }
                 }
@@ -145,6 +152,69 @@ impl<'a> Supports<'a> {
             nodes.push((i as u32, s));
         }
         Ok(Self { db, nodes })
+    }
+}
+
+/// Point inversions on the supports, built on first use (for grids without parametric
+/// coordinates).
+struct Finders<'a> {
+    db: &'a GeomDb,
+    opts: InvertOptions,
+    curves: Vec<Option<CurveInverter<'a, geom_db::SupportCurve>>>,
+    surfaces: Vec<Option<SurfaceInverter<'a, geom_db::SupportSurface>>>,
+}
+
+impl<'a> Finders<'a> {
+    fn new(db: &'a GeomDb) -> Self {
+        Self {
+            db,
+            opts: InvertOptions::for_model(db),
+            curves: (0..db.curves.len()).map(|_| None).collect(),
+            surfaces: (0..db.surfaces.len()).map(|_| None).collect(),
+        }
+    }
+
+    /// The parameter t of the foot of the normal from node `node` at `x` on curve `c`.
+    fn curve(
+        &mut self,
+        c: CurveId,
+        node: usize,
+        x: [f64; 3],
+    ) -> std::result::Result<[f64; 1], String> {
+        let (db, opts) = (self.db, self.opts);
+        let inv = match &mut self.curves[c.index()] {
+            Some(inv) => inv,
+            slot => slot.insert(
+                CurveInverter::new(entity_name(db, SupKind::Curve(c)), db.curve(c), &opts)
+                    .map_err(|e| e.to_string())?,
+            ),
+        };
+        let f = inv
+            .project_indexed(&Point3::from(x), node)
+            .map_err(|e| e.to_string())?;
+        Ok([f.t])
+    }
+
+    /// The parameters (u, v) of the foot of the normal from node `node` at `x` on surface
+    /// `s`.
+    fn surface(
+        &mut self,
+        s: SurfaceId,
+        node: usize,
+        x: [f64; 3],
+    ) -> std::result::Result<[f64; 2], String> {
+        let (db, opts) = (self.db, self.opts);
+        let inv = match &mut self.surfaces[s.index()] {
+            Some(inv) => inv,
+            slot => slot.insert(
+                SurfaceInverter::new(entity_name(db, SupKind::Surface(s)), db.surface(s), &opts)
+                    .map_err(|e| e.to_string())?,
+            ),
+        };
+        let f = inv
+            .project_indexed(&Point3::from(x), node)
+            .map_err(|e| e.to_string())?;
+        Ok(f.uv)
     }
 }
 
@@ -208,19 +278,6 @@ pub(crate) fn check_kind(db: &GeomDb, node: u32, kind: SupKind) -> Result<()> {
     }
 }
 
-fn clamp_param(kind: SupKind, db: &GeomDb, p: [f64; 2]) -> [f64; 2] {
-    match kind {
-        SupKind::Curve(c) => {
-            let (a, b) = db.curve(c).domain();
-            [p[0].clamp(a, b), 0.0]
-        }
-        SupKind::Surface(s) => {
-            let (du, dv) = db.surface(s).domain();
-            [p[0].clamp(du[0], du[1]), p[1].clamp(dv[0], dv[1])]
-        }
-    }
-}
-
 /// r(p) on the support.
 pub(crate) fn point(db: &GeomDb, kind: SupKind, p: [f64; 2]) -> [f64; 3] {
     let q: Point3 = match kind {
@@ -228,32 +285,6 @@ pub(crate) fn point(db: &GeomDb, kind: SupKind, p: [f64; 2]) -> [f64; 3] {
         SupKind::Surface(s) => db.surface(s).point(p[0], p[1]),
     };
     [q.x, q.y, q.z]
-}
-
-/// Parameter step of Eq. 28 (curve) or Eq. 31 (surface) for the physical displacement `rh` at
-/// parameters `p`: the least-squares solution of Eq. 27 / Eq. 30. `None` where the support
-/// is singular (r′ = 0, or G not invertible).
-fn param_step(db: &GeomDb, kind: SupKind, p: [f64; 2], rh: Vector3) -> Option<[f64; 2]> {
-    match kind {
-        SupKind::Curve(c) => {
-            let d = db.curve(c).derivs(p[0]);
-            let g = d.d1.dot(&d.d1);
-            (g > 0.0 && g.is_finite()).then(|| [d.d1.dot(&rh) / g, 0.0])
-        }
-        SupKind::Surface(s) => {
-            let d = db.surface(s).derivs(p[0], p[1]);
-            let g = d.first_fundamental_form(); // Eq. 33
-            let rhs = nalgebra::Vector2::new(d.du.dot(&rh), d.dv.dot(&rh));
-            let det = g[(0, 0)] * g[(1, 1)] - g[(0, 1)] * g[(1, 0)];
-            let scale = g[(0, 0)] * g[(1, 1)];
-            if det.is_nan() || det <= 1e-24 * scale || !det.is_finite() {
-                return None;
-            }
-            let du = (g[(1, 1)] * rhs.x - g[(0, 1)] * rhs.y) / det;
-            let dv = (g[(0, 0)] * rhs.y - g[(1, 0)] * rhs.x) / det;
-            Some([du, dv])
-        }
-    }
 }
 
 /// The sliding constraint at parameters `p`: the tangent plane of a surface (unit normal),
@@ -289,10 +320,12 @@ pub(crate) fn tangent_constraint(
     }
 }
 
-/// Places a node on its support nearest to `target`, starting from parameters `p`: Eq. 28 /
-/// Eq. 31 repeated with RH = target − r(p) (Gauss–Newton on |r(p) − target|²), each step
-/// halved until the distance does not grow, parameters clamped to the domain. Stops when the
-/// physical step is ≤ `tol`. Returns the parameters; errors name the node and the entity.
+/// Places a node on its support nearest to `target`, starting from parameters `p`: the foot
+/// of the normal from `target` (Eq. 11, geom-db's point inversion: the shared safeguarded
+/// Newton, parameters bounded to the support's domain) converged to the tangential residual
+/// `tol` (absolute; the callers derive it from the model size). Returns the parameters
+/// ([t, 0] on a curve); a Newton that does not converge is an error naming the node and the
+/// entity, with the iterations and the residual.
 pub(crate) fn place(
     db: &GeomDb,
     node: u32,
@@ -301,150 +334,42 @@ pub(crate) fn place(
     target: [f64; 3],
     tol: f64,
 ) -> Result<[f64; 2]> {
-    let tgt = Vector3::from(target);
-    let dist2 = |q: [f64; 2]| (Vector3::from(point(db, kind, q)) - tgt).norm_squared();
-    let mut p = clamp_param(kind, db, p);
-    let mut f = dist2(p);
-    for _ in 0..60 {
-        let r = Vector3::from(point(db, kind, p));
-        let Some(dp) = param_step(db, kind, p, tgt - r) else {
-            return Err(Error::Support {
-                node: Some(node),
-                entity: entity_name(db, kind),
-                reason: format!("singular first fundamental form at parameters {p:?}"),
-            });
-        };
-        let mut lam = 1.0;
-        let mut accepted = None;
-        for _ in 0..30 {
-            let q = clamp_param(kind, db, [p[0] + lam * dp[0], p[1] + lam * dp[1]]);
-            let fq = dist2(q);
-            if fq <= f {
-                accepted = Some((q, fq));
-                break;
-            }
-            lam *= 0.5;
+    let tgt = Point3::from(target);
+    let settings = Settings { tol, max_iters: 60 };
+    let (x, report) = match kind {
+        SupKind::Curve(c) => {
+            let curve = db.curve(c);
+            let (a, b) = curve.domain();
+            let o = foot_on_curve(curve, &tgt, p[0].clamp(a, b), a, b, settings);
+            ([o.x[0], 0.0], o.report)
         }
-        let Some((q, fq)) = accepted else {
-            // No descent along the Gauss–Newton direction: a (local) nearest point.
-            return Ok(p);
-        };
-        let moved = (Vector3::from(point(db, kind, q)) - r).norm();
-        p = q;
-        f = fq;
-        if moved <= tol || !f.is_finite() {
-            break;
+        SupKind::Surface(s) => {
+            let surf = db.surface(s);
+            let (du, dv) = surf.domain();
+            let p0 = [p[0].clamp(du[0], du[1]), p[1].clamp(dv[0], dv[1])];
+            let o = foot_on_surface(surf, &tgt, p0, [du[0], dv[0]], [du[1], dv[1]], settings);
+            (o.x, o.report)
         }
+    };
+    if !report.converged {
+        return Err(not_placed(db, node, kind, report));
     }
-    if !f.is_finite() {
-        return Err(Error::Support {
-            node: Some(node),
-            entity: entity_name(db, kind),
-            reason: "the parameter iteration diverged (non-finite point)".into(),
-        });
-    }
-    Ok(p)
+    Ok(x)
 }
 
-/// Nearest point of a curve: best of a sampling of the domain (or `guess`), then Gauss–Newton
-/// steps (Eq. 28 with RH = x − r). Returns (t, distance).
-pub fn project_curve(c: &impl ParamCurve, x: Vector3, guess: Option<f64>) -> (f64, f64) {
-    let (a, b) = c.domain();
-    let mut t = guess.unwrap_or_else(|| {
-        let n = 64;
-        (0..=n)
-            .map(|k| a + (b - a) * k as f64 / n as f64)
-            .min_by(|&s, &u| {
-                (c.point(s).coords - x)
-                    .norm_squared()
-                    .total_cmp(&(c.point(u).coords - x).norm_squared())
-            })
-            .unwrap_or(a)
-    });
-    for _ in 0..50 {
-        let d = c.derivs(t);
-        let g = d.d1.norm_squared();
-        if g.is_nan() || g <= 0.0 {
-            break;
-        }
-        let f0 = (d.point.coords - x).norm_squared();
-        let step = d.d1.dot(&(x - d.point.coords)) / g;
-        let mut lam = 1.0;
-        let mut moved = false;
-        for _ in 0..30 {
-            let s = (t + lam * step).clamp(a, b);
-            if (c.point(s).coords - x).norm_squared() <= f0 {
-                moved = s != t;
-                t = s;
-                break;
-            }
-            lam *= 0.5;
-        }
-        if !moved || (lam * step).abs() * g.sqrt() <= 1e-15 * (1.0 + x.norm()) {
-            break;
-        }
+fn not_placed(db: &GeomDb, node: u32, kind: SupKind, r: NewtonReport) -> Error {
+    let reason = if r.residual.is_finite() {
+        format!(
+            "the foot of the normal from the node's new position did not converge after {} \
+             iterations (residual {:e}, tolerance {:e})",
+            r.iterations, r.residual, r.tolerance
+        )
+    } else {
+        "the parameter iteration diverged (non-finite point)".into()
+    };
+    Error::Support {
+        node: Some(node),
+        entity: entity_name(db, kind),
+        reason,
     }
-    (t, (c.point(t).coords - x).norm())
-}
-
-/// Nearest point of a surface: best of a sampling of the domain (or `guess`), then
-/// Gauss–Newton steps (Eq. 31 with RH = x − r). Returns ((u, v), distance).
-pub fn project_surface(
-    s: &impl ParamSurface,
-    x: Vector3,
-    guess: Option<[f64; 2]>,
-) -> ([f64; 2], f64) {
-    let (du, dv) = s.domain();
-    let mut p = guess.unwrap_or_else(|| {
-        let n = 24;
-        let mut best = ([du[0], dv[0]], f64::INFINITY);
-        for i in 0..=n {
-            for j in 0..=n {
-                let q = [
-                    du[0] + (du[1] - du[0]) * i as f64 / n as f64,
-                    dv[0] + (dv[1] - dv[0]) * j as f64 / n as f64,
-                ];
-                let d = (s.point(q[0], q[1]).coords - x).norm_squared();
-                if d < best.1 {
-                    best = (q, d);
-                }
-            }
-        }
-        best.0
-    });
-    let clamp = |q: [f64; 2]| [q[0].clamp(du[0], du[1]), q[1].clamp(dv[0], dv[1])];
-    for _ in 0..50 {
-        let d = s.derivs(p[0], p[1]);
-        let g = d.first_fundamental_form();
-        let rh = x - d.point.coords;
-        let (a, b) = (d.du.dot(&rh), d.dv.dot(&rh));
-        let det = g[(0, 0)] * g[(1, 1)] - g[(0, 1)] * g[(1, 0)];
-        if det.is_nan() || det <= 0.0 {
-            break;
-        }
-        let step = [
-            (g[(1, 1)] * a - g[(0, 1)] * b) / det,
-            (g[(0, 0)] * b - g[(1, 0)] * a) / det,
-        ];
-        let f0 = rh.norm_squared();
-        let mut lam = 1.0;
-        let mut moved = None;
-        for _ in 0..30 {
-            let q = clamp([p[0] + lam * step[0], p[1] + lam * step[1]]);
-            let pq = s.point(q[0], q[1]).coords;
-            if (pq - x).norm_squared() <= f0 {
-                moved = Some((q, (pq - d.point.coords).norm()));
-                break;
-            }
-            lam *= 0.5;
-        }
-        let Some((q, len)) = moved else {
-            break;
-        };
-        p = q;
-        if len <= 1e-15 * (1.0 + x.norm()) {
-            break;
-        }
-    }
-    (p, (s.point(p[0], p[1]).coords - x).norm())
 }

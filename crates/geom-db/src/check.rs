@@ -7,16 +7,17 @@
 //!   within each support surface, and between neighbouring arcs of each support curve;
 //! * curve–surface gaps: for each curve component bounding a surface component, the largest
 //!   distance from samples of the curve to the support surface (foot of the normal, Eq. 11,
-//!   by a safeguarded Gauss–Newton iteration started from the nearest point of a sample grid).
+//!   [`crate::invert`]: the shared safeguarded Newton started from the nearest points of a
+//!   sample grid).
 
 use std::collections::BTreeMap;
 
 use serde::Serialize;
 
 use crate::db::GeomDb;
-use crate::eval::{ParamCurve, ParamSurface};
+use crate::eval::ParamCurve;
 use crate::ids::{CurveCompId, CurveId, SurfCompId, SurfaceId};
-use crate::prelude::Point3;
+use crate::invert::{InvertOptions, SurfaceInverter};
 use crate::surface::SupportSurface;
 
 /// Options of [`GeomDb::check`].
@@ -170,7 +171,7 @@ impl GeomDb {
         let mut gaps = Vec::new();
         gaps.extend(self.corner_gaps());
         gaps.extend(self.border_gaps());
-        gaps.extend(self.curve_surface_gaps(opts.samples.max(2)));
+        gaps.extend(self.curve_surface_gaps(opts.samples.max(2), &mut problems));
         let max_gap = gaps.iter().map(|g| g.max).fold(0.0, f64::max);
         for g in &gaps {
             if g.max.is_nan() || g.max > gap_tol {
@@ -271,9 +272,12 @@ impl GeomDb {
     pub fn misoriented_loops(&self, gap_tol: f64) -> Vec<(SurfCompId, usize)> {
         const K: usize = 12;
         let mut out = Vec::new();
+        let opts = InvertOptions::for_model(self);
         for (sci, sc) in self.surface_components.iter().enumerate() {
-            let surf = &self.surfaces[sc.surface.index()];
-            let proj = Projector::new(surf);
+            let Ok(inv) = self.inverter(sc.surface, &opts) else {
+                out.push((SurfCompId::from_index(sci), 0));
+                continue;
+            };
             for (li, lp) in sc.loops.iter().enumerate() {
                 let mut poly: Vec<(f64, f64)> = Vec::with_capacity(lp.len() * K);
                 for oc in lp {
@@ -283,12 +287,13 @@ impl GeomDb {
                         let f = (k as f64 + 0.5) / K as f64;
                         let f = if oc.reversed { 1.0 - f } else { f };
                         let p = curve.point(cc.param_at(f));
-                        let cont = poly.last().map(|&uv| Projector::newton(surf, &p, uv));
+                        let cont = poly.last().map(|&(u, v)| inv.foot_from(&p, [u, v]));
                         let uv = match cont {
-                            Some((uv, d)) if d <= gap_tol => uv,
-                            _ => proj.project(surf, &p).0,
+                            Some(f) if f.report.converged && f.distance <= gap_tol => f.uv,
+                            // a sample that cannot be projected makes the area NaN: reported
+                            _ => inv.nearest_indexed(&p, 0).map_or([f64::NAN; 2], |f| f.uv),
                         };
-                        poly.push(uv);
+                        poly.push((uv[0], uv[1]));
                     }
                 }
                 let n = poly.len();
@@ -374,12 +379,32 @@ impl GeomDb {
         out
     }
 
-    fn curve_surface_gaps(&self, samples: usize) -> Vec<Gap> {
+    /// The point inversion on support surface `s`, labelled for messages.
+    fn inverter<'a>(
+        &'a self,
+        s: SurfaceId,
+        opts: &InvertOptions,
+    ) -> crate::Result<SurfaceInverter<'a, SupportSurface>> {
+        let name = &self.surfaces[s.index()].name;
+        let label = if name.is_empty() {
+            s.to_string()
+        } else {
+            format!("{s} ({name})")
+        };
+        SurfaceInverter::new(label, &self.surfaces[s.index()], opts)
+    }
+
+    /// Largest distance from samples of each curve component to each surface component it
+    /// bounds (foot of the normal, Eq. 11; the nearest surface point found, an upper bound
+    /// of the distance); a sample that cannot be projected gives a NaN gap (a problem) and
+    /// its error in `problems`.
+    fn curve_surface_gaps(&self, samples: usize, problems: &mut Vec<String>) -> Vec<Gap> {
         let mut out = Vec::new();
-        let finders: Vec<Projector> = self.surfaces.iter().map(Projector::new).collect();
+        let opts = InvertOptions::for_model(self);
+        let finders: Vec<_> = (0..self.surfaces.len())
+            .map(|i| self.inverter(SurfaceId::from_index(i), &opts))
+            .collect();
         for (sci, sc) in self.surface_components.iter().enumerate() {
-            let surf = &self.surfaces[sc.surface.index()];
-            let proj = &finders[sc.surface.index()];
             for lp in &sc.loops {
                 for oc in lp {
                     let cc = &self.curve_components[oc.comp.index()];
@@ -388,8 +413,21 @@ impl GeomDb {
                     for k in 0..samples {
                         let s = k as f64 / (samples - 1) as f64;
                         let p = curve.point(cc.param_at(s));
-                        let (_, d) = proj.project(surf, &p);
-                        m = m.max(d);
+                        let d = match &finders[sc.surface.index()] {
+                            Ok(inv) => inv
+                                .nearest_indexed(&p, k)
+                                .map(|f| f.distance)
+                                .map_err(|e| e.to_string()),
+                            Err(e) => Err(e.to_string()),
+                        };
+                        match d {
+                            Ok(d) => m = m.max(d),
+                            Err(e) => {
+                                problems.push(format!("{} sample {k}: {e}", oc.comp));
+                                m = f64::NAN;
+                                break;
+                            }
+                        }
                     }
                     out.push(Gap {
                         what: format!(
@@ -404,142 +442,5 @@ impl GeomDb {
             }
         }
         out
-    }
-}
-
-/// Point projection onto a support surface by sampling then Gauss–Newton (Eq. 11).
-pub(crate) struct Projector {
-    samples: Vec<((f64, f64), Point3)>,
-}
-
-impl Projector {
-    const PER_PATCH: usize = 8;
-
-    pub(crate) fn new(s: &SupportSurface) -> Self {
-        let n = Self::PER_PATCH;
-        let mut samples = Vec::new();
-        for j in 0..s.n_v {
-            for i in 0..s.n_u {
-                for a in 0..=n {
-                    for b in 0..=n {
-                        let u = i as f64 + a as f64 / n as f64;
-                        let v = j as f64 + b as f64 / n as f64;
-                        samples.push(((u, v), s.point(u, v)));
-                    }
-                }
-            }
-        }
-        Self { samples }
-    }
-
-    /// Parameters of the foot of the normal from p and the distance to it: Gauss–Newton
-    /// from each of the few nearest samples (several, because seams and poles make the
-    /// nearest sample ambiguous), the best result kept.
-    pub(crate) fn project(&self, s: &SupportSurface, p: &Point3) -> ((f64, f64), f64) {
-        const STARTS: usize = 4;
-        let mut best: [((f64, f64), f64); STARTS] = [((0.0, 0.0), f64::INFINITY); STARTS];
-        for &(uv, q) in &self.samples {
-            let d = (q - p).norm_squared();
-            if d < best[STARTS - 1].1 {
-                best[STARTS - 1] = (uv, d);
-                best.sort_by(|a, b| a.1.total_cmp(&b.1));
-            }
-        }
-        let mut out = ((0.0, 0.0), f64::INFINITY);
-        for &(uv, d) in &best {
-            if !d.is_finite() {
-                continue;
-            }
-            let r = Self::newton(s, p, uv);
-            if r.1 < out.1 {
-                out = r;
-            }
-        }
-        out
-    }
-
-    fn newton(s: &SupportSurface, p: &Point3, start: (f64, f64)) -> ((f64, f64), f64) {
-        let (mut u, mut v) = start;
-        let (umax, vmax) = (s.n_u as f64, s.n_v as f64);
-        let mut dist = (s.point(u, v) - p).norm();
-        for _ in 0..30 {
-            let d = s.derivs(u, v);
-            let r = d.point - p;
-            // Levenberg–Marquardt regularisation: a pole (r_u = 0) still gives a step.
-            let mut g = d.first_fundamental_form();
-            let mu = 1e-12 * g.trace();
-            if mu.is_nan() || mu <= 0.0 {
-                break;
-            }
-            g[(0, 0)] += mu;
-            g[(1, 1)] += mu;
-            let rhs = nalgebra::Vector2::new(-d.du.dot(&r), -d.dv.dot(&r));
-            let Some(mut step) = g.lu().solve(&rhs) else {
-                break;
-            };
-            // active set: a parameter on its bound whose step points outwards stays there,
-            // and the other is solved alone (1D Newton along the border)
-            let out_u = (u <= 0.0 && step.x < 0.0) || (u >= umax && step.x > 0.0);
-            let out_v = (v <= 0.0 && step.y < 0.0) || (v >= vmax && step.y > 0.0);
-            if out_u && out_v {
-                break;
-            } else if out_u {
-                step = nalgebra::Vector2::new(0.0, rhs.y / g[(1, 1)]);
-            } else if out_v {
-                step = nalgebra::Vector2::new(rhs.x / g[(0, 0)], 0.0);
-            }
-            // damped step: accept only if the distance decreases
-            let mut lambda = 1.0;
-            let mut improved = false;
-            for _ in 0..8 {
-                let (nu, nv) = (
-                    (u + lambda * step.x).clamp(0.0, umax),
-                    (v + lambda * step.y).clamp(0.0, vmax),
-                );
-                let nd = (s.point(nu, nv) - p).norm();
-                if nd < dist {
-                    u = nu;
-                    v = nv;
-                    dist = nd;
-                    improved = true;
-                    break;
-                }
-                lambda *= 0.5;
-            }
-            if !improved || (lambda * step.norm()) < 1e-15 {
-                break;
-            }
-        }
-        ((u, v), dist)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::surface::Patch;
-
-    #[test]
-    fn projector_finds_foot_on_quarter_cylinder() {
-        let s = SupportSurface::new(
-            "q",
-            4,
-            1,
-            (0..4)
-                .map(|i| {
-                    Patch::interpolate(8, 1, move |u, v| {
-                        let th = (i as f64 + u) * std::f64::consts::FRAC_PI_2;
-                        Point3::new(th.cos(), th.sin(), 2.0 * v)
-                    })
-                })
-                .collect(),
-        );
-        let pr = Projector::new(&s);
-        for k in 0..32 {
-            let u = 4.0 * k as f64 / 32.0 + 0.01;
-            let p = s.point(u, 0.0) + crate::prelude::Vector3::new(0.0, 0.0, -0.0);
-            let ((pu, pv), d) = pr.project(&s, &p);
-            assert!(d < 1e-12, "u = {u}: got ({pu}, {pv}) at distance {d}");
-        }
     }
 }

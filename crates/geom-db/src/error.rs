@@ -107,9 +107,63 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// Point inversion (the foot of the normal, Eq. 11) found no converged foot.
+    ///
+    /// ```
+    /// use geom_db::invert::{CurveInverter, InvertOptions};
+    /// use geom_db::prelude::Point3;
+    /// let c = geom_db::SupportCurve::new("c", vec![geom_db::Arc::new(vec![
+    ///     Point3::origin(), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0)])]);
+    /// let opts = InvertOptions::new(1.0).with_max_iters(0).with_rel_tol(1e-300);
+    /// let inv = CurveInverter::new("curve 3", &c, &opts).unwrap();
+    /// let err = inv.project_indexed(&Point3::new(0.4, 0.5, 0.0), 4).unwrap_err();
+    /// assert!(matches!(err, geom_db::Error::InversionFailed { point: 4, .. }));
+    /// ```
+    #[error(
+        "{entity}: foot of the normal from point {point} did not converge after {iterations} \
+         iterations (residual {residual:e}, tolerance {tolerance:e})"
+    )]
+    InversionFailed {
+        /// The curve or surface (its label).
+        entity: String,
+        /// Index of the point in the caller's list (0 for a single point).
+        point: usize,
+        /// Newton iterations of the best failed start.
+        iterations: usize,
+        /// Its final tangential residual (length units).
+        residual: f64,
+        /// The tolerance asked for.
+        tolerance: f64,
+    },
+
+    /// A point inversion cannot start: non-finite point, empty or non-finite domain.
+    ///
+    /// ```
+    /// use geom_db::invert::{CurveInverter, InvertOptions};
+    /// use geom_db::prelude::Point3;
+    /// let c = geom_db::SupportCurve::new("c", vec![geom_db::Arc::line(
+    ///     Point3::origin(), Point3::new(1.0, 0.0, 0.0))]);
+    /// let inv = CurveInverter::new("curve 3", &c, &InvertOptions::new(1.0)).unwrap();
+    /// let err = inv.project(&Point3::new(f64::NAN, 0.0, 0.0)).unwrap_err();
+    /// assert_eq!(err.to_string(), "curve 3: point 0: the point has a non-finite coordinate");
+    /// ```
+    #[error("{entity}: {}{reason}", point_prefix(*.point))]
+    InversionInput {
+        /// The curve or surface (its label).
+        entity: String,
+        /// Index of the point at fault, if a point is.
+        point: Option<usize>,
+        /// What is wrong.
+        reason: String,
+    },
+
     /// An IGES import failed (see [`import::Error`](crate::import::Error)).
     #[error(transparent)]
     Import(#[from] crate::import::Error),
+}
+
+fn point_prefix(point: Option<usize>) -> String {
+    point.map_or(String::new(), |i| format!("point {i}: "))
 }
 
 fn path_prefix(path: &str) -> String {

@@ -16,6 +16,9 @@
 //! * The database as one serde type stored as RON ([`GeomDb`]), validated on load, and a
 //!   check report ([`check`]).
 //! * B-spline bases ([`bspline`]), shared by the parametrisation crates.
+//! * The numerics every crate shares: the safeguarded box-constrained Newton ([`newton`]),
+//!   point inversion — the foot of the normal, Eq. (11) — on curves and surfaces
+//!   ([`invert`]), and point merging within a tolerance ([`merge`]).
 
 pub mod bspline;
 pub mod check;
@@ -27,7 +30,9 @@ pub mod error;
 pub mod eval;
 pub mod ids;
 pub mod import;
+pub mod invert;
 pub mod merge;
+pub mod newton;
 pub mod poly;
 pub mod prelude;
 pub mod surface;

@@ -21,8 +21,8 @@
 //! evaluates the end arcs' polynomials beyond their interval.
 
 use crate::error::{Error, Result};
-use crate::newton::{self, Eval, Problem, Settings};
 use geom_db::eval::ParamCurve;
+use geom_db::newton::{self, Eval, Problem, Settings};
 use geom_db::prelude::Point3;
 use nalgebra::{SMatrix, SVector};
 
@@ -246,7 +246,7 @@ where
     while k < starts.len() {
         let s = &starts[k];
         let o = newton::minimise(&prob, *s, &lo, &hi, settings);
-        iterations += o.iters;
+        iterations += o.report.iterations;
         let pa = a.point(o.x[0]);
         let pb = b.point(o.x[1]);
         let dist = (pa - pb).norm();

@@ -11,7 +11,8 @@
 //! [0, n_v]), so they run on the database's power-basis entities and on analytic shapes.
 //!
 //! * [`project`]: foot of the normal on a surface or a curve (Eq. 11), global seeding by a
-//!   bounding-volume hierarchy and safeguarded Newton; batches in parallel.
+//!   bounding-volume hierarchy calling geom-db's point inversion ([`geom_db::invert`],
+//!   the safeguarded Newton of [`geom_db::newton`]); batches in parallel.
 //! * [`ssi`]: new control points of a support curve from its two defining surfaces (Eq. 12),
 //!   with a frozen parameter chosen per point and a normal-plane fallback.
 //! * [`corner`]: corners as the minimal-distance points of two curves (Eq. 13).
@@ -26,7 +27,6 @@ pub mod bvh;
 pub mod check;
 pub mod corner;
 pub mod error;
-mod newton;
 pub mod project;
 pub mod ssi;
 pub mod update;

@@ -34,10 +34,10 @@ use std::sync::OnceLock;
 
 use crate::bvh::{Aabb, Bvh};
 use crate::error::{Error, Result};
-use crate::newton::{self, Eval, Problem, Settings};
 use geom_db::eval::{ParamCurve, ParamSurface};
+pub use geom_db::invert::{CurveFoot, SurfaceFoot, interval_of};
+use geom_db::invert::{CurveInverter, InvertOptions, SurfaceInverter, interval_edges};
 use geom_db::prelude::{Point3, Vector3};
-use nalgebra::{SMatrix, SVector};
 use rayon::prelude::*;
 
 /// Knobs of the foot-of-the-normal search.
@@ -95,76 +95,6 @@ impl ProjectOptions {
     }
 }
 
-/// The foot of the normal on a surface.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct SurfaceFoot {
-    /// Global parameters (u, v).
-    pub uv: [f64; 2],
-    /// Patch (i, j) containing (u, v): index of the break interval in u and in v.
-    pub patch: [usize; 2],
-    /// r(u, v).
-    pub point: [f64; 3],
-    /// |r(u, v) − p|.
-    pub distance: f64,
-    /// The foot is on the boundary of the parameter domain with the distance still
-    /// decreasing outward (a constrained minimum): the normal condition holds only along the
-    /// boundary.
-    pub on_boundary: bool,
-    /// Newton iterations of the run that produced this foot.
-    pub iterations: usize,
-    /// Final tangential residual (length units).
-    pub residual: f64,
-    /// The residual is below the tolerance.
-    pub converged: bool,
-    /// Number of Newton starts made.
-    pub starts: usize,
-}
-
-/// The foot of the normal on a curve.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct CurveFoot {
-    /// Global parameter t.
-    pub t: f64,
-    /// Arc containing t (index of the break interval).
-    pub arc: usize,
-    /// r(t).
-    pub point: [f64; 3],
-    /// |r(t) − p|.
-    pub distance: f64,
-    /// The foot is an end of the curve with the distance still decreasing outward.
-    pub on_boundary: bool,
-    /// Newton iterations of the run that produced this foot.
-    pub iterations: usize,
-    /// Final residual |(r − p)·r'| / |r'| (length units).
-    pub residual: f64,
-    /// The residual is below the tolerance.
-    pub converged: bool,
-    /// Number of Newton starts made.
-    pub starts: usize,
-}
-
-/// Index of the interval of sorted `edges` (first..last) containing x (last one closed).
-pub(crate) fn interval_of(edges: &[f64], x: f64) -> usize {
-    let n = edges.len().saturating_sub(1).max(1);
-    let i = edges.partition_point(|&e| e <= x);
-    i.saturating_sub(1).min(n - 1)
-}
-
-/// Sorted, deduplicated interval edges: the domain ends plus the breaks strictly inside.
-fn edges(lo: f64, hi: f64, breaks: &[f64]) -> Vec<f64> {
-    let mut e = vec![lo];
-    let mut inner: Vec<f64> = breaks
-        .iter()
-        .copied()
-        .filter(|b| b.is_finite() && *b > lo && *b < hi)
-        .collect();
-    inner.sort_by(f64::total_cmp);
-    inner.dedup();
-    e.extend(inner);
-    e.push(hi);
-    e
-}
-
 /// Cell subdivision of the intervals given by `edges`: at least `per` cells per interval and
 /// at least `min_total` cells overall.
 fn cell_edges(edges: &[f64], per: usize, min_total: usize) -> Vec<f64> {
@@ -210,12 +140,8 @@ impl SurfCell {
 /// built at the first global search, so a projector used only for local Newton
 /// ([`SurfaceProjector::project_from`]) never pays for it.
 pub struct SurfaceProjector<'a, S: ParamSurface + ?Sized> {
-    label: String,
-    surf: &'a S,
-    lo: [f64; 2],
-    hi: [f64; 2],
-    edges_u: Vec<f64>,
-    edges_v: Vec<f64>,
+    /// geom-db's point inversion: label, surface, patch edges and the local Newton.
+    inv: SurfaceInverter<'a, S>,
     seeds: OnceLock<SurfSeeds>,
     scale: f64,
     tol: f64,
@@ -242,58 +168,20 @@ fn check_domain(label: &str, lo: f64, hi: f64, what: &str) -> Result<()> {
     Ok(())
 }
 
+/// geom-db's inversion options from the search's options and the length scale.
+fn invert_options(opts: &ProjectOptions, scale: f64) -> InvertOptions {
+    InvertOptions {
+        rel_tol: opts.rel_tol,
+        length_scale: scale,
+        max_iters: opts.max_iters,
+        ..InvertOptions::new(scale)
+    }
+}
+
 fn non_finite(label: &str, what: &str) -> Error {
     Error::BadEntity {
         entity: label.to_string(),
         reason: format!("non-finite evaluation at {what}"),
-    }
-}
-
-struct SurfProblem<'s, S: ParamSurface + ?Sized> {
-    s: &'s S,
-    p: Point3,
-}
-
-impl<S: ParamSurface + ?Sized> Problem<2> for SurfProblem<'_, S> {
-    fn eval(&self, x: &[f64; 2], active: &[bool; 2]) -> Eval<2> {
-        let d = self.s.derivs(x[0], x[1]);
-        let r = d.point - self.p;
-        let g = SVector::<f64, 2>::new(d.du.dot(&r), d.dv.dot(&r));
-        let h = SMatrix::<f64, 2, 2>::new(
-            d.du.dot(&d.du) + d.duu.dot(&r),
-            d.du.dot(&d.dv) + d.duv.dot(&r),
-            d.du.dot(&d.dv) + d.duv.dot(&r),
-            d.dv.dot(&d.dv) + d.dvv.dot(&r),
-        );
-        // |(r − p)·r_i| / |r_i|; near a pole (|r_i| → 0 on a degenerate patch edge) the
-        // denominator is floored at 1e-3 of the other tangent so round-off is not amplified
-        let norms = [d.du.norm(), d.dv.norm()];
-        let floor = 1e-3 * norms[0].max(norms[1]);
-        let mut res: f64 = 0.0;
-        for i in 0..2 {
-            if !active[i] && norms[i] > 0.0 {
-                res = res.max(g[i].abs() / norms[i].max(floor));
-            }
-        }
-        let f = 0.5 * r.norm_squared();
-        if !f.is_finite() {
-            return Eval {
-                f: f64::INFINITY,
-                g,
-                h,
-                res: f64::INFINITY,
-                fnoise: 0.0,
-            };
-        }
-        let fnoise =
-            16.0 * f64::EPSILON * r.norm() * (d.point.coords.norm() + self.p.coords.norm());
-        Eval {
-            f,
-            g,
-            h,
-            res,
-            fnoise,
-        }
     }
 }
 
@@ -304,14 +192,9 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
         let (du, dv) = surf.domain();
         check_domain(&label, du[0], du[1], "u")?;
         check_domain(&label, dv[0], dv[1], "v")?;
-        let (bu, bv) = surf.breaks();
         let mut pr = Self {
-            label,
-            surf,
-            lo: [du[0], dv[0]],
-            hi: [du[1], dv[1]],
-            edges_u: edges(du[0], du[1], &bu),
-            edges_v: edges(dv[0], dv[1], &bv),
+            // the tolerance is set below, once the length scale is known
+            inv: SurfaceInverter::new(label, surf, &invert_options(opts, 1.0))?,
             seeds: OnceLock::new(),
             scale: 0.0,
             tol: 0.0,
@@ -328,6 +211,11 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
         };
         pr.scale = scale;
         pr.tol = opts.rel_tol * scale;
+        pr.inv = SurfaceInverter::new(
+            pr.inv.label().to_string(),
+            surf,
+            &invert_options(opts, scale),
+        )?;
         Ok(pr)
     }
 
@@ -343,9 +231,10 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
     /// Builds the seeding hierarchy; `scale`: the length scale (None: the diagonal of the
     /// surface's samples, returned with the hierarchy).
     fn build_seeds(&self, scale: Option<f64>) -> Result<(SurfSeeds, f64)> {
-        let (surf, opts, label) = (self.surf, &self.opts, &self.label);
-        let cu = cell_edges(&self.edges_u, opts.cells_per_patch, opts.min_cells);
-        let cv = cell_edges(&self.edges_v, opts.cells_per_patch, opts.min_cells);
+        let (surf, opts, label) = (self.inv.surface(), &self.opts, self.inv.label());
+        let [eu, ev] = self.inv.edges();
+        let cu = cell_edges(eu, opts.cells_per_patch, opts.min_cells);
+        let cv = cell_edges(ev, opts.cells_per_patch, opts.min_cells);
         let nc = (cu.len() - 1) * (cv.len() - 1);
         let mut cells = Vec::with_capacity(nc);
         let mut samples = Vec::with_capacity(nc * SAMPLES_PER_CELL);
@@ -423,12 +312,12 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
 
     /// The surface's label.
     pub fn label(&self) -> &str {
-        &self.label
+        self.inv.label()
     }
 
     /// The surface.
     pub fn surface(&self) -> &'a S {
-        self.surf
+        self.inv.surface()
     }
 
     /// The length scale used for tolerances.
@@ -443,41 +332,14 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
 
     /// The patch (interval of the breaks) containing (u, v).
     pub fn patch_of(&self, uv: [f64; 2]) -> [usize; 2] {
-        [
-            interval_of(&self.edges_u, uv[0]),
-            interval_of(&self.edges_v, uv[1]),
-        ]
+        self.inv.patch_of(uv)
     }
 
     /// Local Newton on Eq. (11) from the parameters `uv0` only (no global search): a warm
-    /// start for points known to be near `uv0`. The report says whether it converged.
+    /// start for points known to be near `uv0` (geom-db's
+    /// [`SurfaceInverter::foot_from`]). The report says whether it converged.
     pub fn project_from(&self, p: &Point3, uv0: [f64; 2]) -> SurfaceFoot {
-        let prob = SurfProblem {
-            s: self.surf,
-            p: *p,
-        };
-        let o = newton::minimise(
-            &prob,
-            uv0,
-            &self.lo,
-            &self.hi,
-            Settings {
-                tol: self.tol,
-                max_iters: self.opts.max_iters,
-            },
-        );
-        let pt = self.surf.point(o.x[0], o.x[1]);
-        SurfaceFoot {
-            uv: o.x,
-            patch: self.patch_of(o.x),
-            point: [pt.x, pt.y, pt.z],
-            distance: (pt - p).norm(),
-            on_boundary: o.active.iter().any(|&a| a),
-            iterations: o.iters,
-            residual: o.eval.res,
-            converged: o.converged,
-            starts: 1,
-        }
+        self.inv.foot_from(p, uv0)
     }
 
     fn nearest_sample(seeds: &SurfSeeds, cell: usize, p: &Point3) -> (f64, [f64; 2]) {
@@ -497,7 +359,7 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
     pub fn project_indexed(&self, p: &Point3, index: usize) -> Result<SurfaceFoot> {
         self.search(p, index, f64::INFINITY)?
             .ok_or_else(|| Error::ProjectionFailed {
-                entity: self.label.clone(),
+                entity: self.label().to_string(),
                 index,
                 iters: 0,
                 residual: f64::INFINITY,
@@ -510,7 +372,7 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
     fn search(&self, p: &Point3, index: usize, upper: f64) -> Result<Option<SurfaceFoot>> {
         if !p.iter().all(|c| c.is_finite()) {
             return Err(Error::NonFinitePoint {
-                entity: self.label.clone(),
+                entity: self.label().to_string(),
                 index,
             });
         }
@@ -575,10 +437,10 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
             started.push(uv0);
             starts += 1;
             let f = self.project_from(p, uv0);
-            if f.converged {
+            if f.report.converged {
                 found.push(f.uv);
             }
-            if f.converged {
+            if f.report.converged {
                 if best.is_none_or(|b| f.distance < b.distance) {
                     best = Some(f);
                 }
@@ -598,16 +460,19 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceProjector<'a, S> {
                     point: [f64::NAN; 3],
                     distance: f64::NAN,
                     on_boundary: false,
-                    iterations: 0,
-                    residual: f64::INFINITY,
-                    converged: false,
+                    report: geom_db::newton::NewtonReport {
+                        converged: false,
+                        iterations: 0,
+                        residual: f64::INFINITY,
+                        tolerance: self.tol,
+                    },
                     starts,
                 });
                 Err(Error::ProjectionFailed {
-                    entity: self.label.clone(),
+                    entity: self.label().to_string(),
                     index,
-                    iters: w.iterations,
-                    residual: w.residual,
+                    iters: w.report.iterations,
+                    residual: w.report.residual,
                     tol: self.tol,
                 })
             }
@@ -643,11 +508,8 @@ const CURVE_SAMPLES_PER_CELL: usize = 3;
 
 /// Foot-of-the-normal search on one curve (the 1-D analogue of [`SurfaceProjector`]).
 pub struct CurveProjector<'a, C: ParamCurve + ?Sized> {
-    label: String,
-    curve: &'a C,
-    lo: f64,
-    hi: f64,
-    edges: Vec<f64>,
+    /// geom-db's point inversion: label, curve, arc edges and the local Newton.
+    inv: CurveInverter<'a, C>,
     cells: Vec<CurveCell>,
     samples: Vec<(Point3, f64)>,
     bvh: Bvh,
@@ -656,41 +518,13 @@ pub struct CurveProjector<'a, C: ParamCurve + ?Sized> {
     opts: ProjectOptions,
 }
 
-struct CurveProblem<'s, C: ParamCurve + ?Sized> {
-    c: &'s C,
-    p: Point3,
-}
-
-impl<C: ParamCurve + ?Sized> Problem<1> for CurveProblem<'_, C> {
-    fn eval(&self, x: &[f64; 1], active: &[bool; 1]) -> Eval<1> {
-        let d = self.c.derivs(x[0]);
-        let r = d.point - self.p;
-        let g = d.d1.dot(&r);
-        let h = d.d1.dot(&d.d1) + d.d2.dot(&r);
-        let n = d.d1.norm();
-        let res = if active[0] || n == 0.0 {
-            0.0
-        } else {
-            g.abs() / n
-        };
-        let f = 0.5 * r.norm_squared();
-        Eval {
-            f: if f.is_finite() { f } else { f64::INFINITY },
-            g: SVector::<f64, 1>::new(g),
-            h: SMatrix::<f64, 1, 1>::new(h),
-            res: if f.is_finite() { res } else { f64::INFINITY },
-            fnoise: 16.0 * f64::EPSILON * r.norm() * (d.point.coords.norm() + self.p.coords.norm()),
-        }
-    }
-}
-
 impl<'a, C: ParamCurve + ?Sized> CurveProjector<'a, C> {
     /// Builds the seeding hierarchy of `curve`; `label` names the curve in errors.
     pub fn new(label: impl Into<String>, curve: &'a C, opts: &ProjectOptions) -> Result<Self> {
         let label = label.into();
         let (lo, hi) = curve.domain();
         check_domain(&label, lo, hi, "t")?;
-        let edges = edges(lo, hi, &curve.breaks());
+        let edges = interval_edges(lo, hi, &curve.breaks());
         let ce = cell_edges(&edges, opts.cells_per_patch.max(4), opts.min_cells * 2);
         let mut cells = Vec::with_capacity(ce.len() - 1);
         let mut samples = Vec::with_capacity(3 * (ce.len() - 1));
@@ -727,11 +561,7 @@ impl<'a, C: ParamCurve + ?Sized> CurveProjector<'a, C> {
             .map(|b| b.inflated(1e-9 * scale))
             .collect();
         Ok(Self {
-            label,
-            curve,
-            lo,
-            hi,
-            edges,
+            inv: CurveInverter::new(label, curve, &invert_options(opts, scale))?,
             cells,
             samples,
             bvh: Bvh::new(boxes),
@@ -743,12 +573,12 @@ impl<'a, C: ParamCurve + ?Sized> CurveProjector<'a, C> {
 
     /// The curve's label.
     pub fn label(&self) -> &str {
-        &self.label
+        self.inv.label()
     }
 
     /// The curve.
     pub fn curve(&self) -> &'a C {
-        self.curve
+        self.inv.curve()
     }
 
     /// The length scale used for tolerances.
@@ -756,34 +586,10 @@ impl<'a, C: ParamCurve + ?Sized> CurveProjector<'a, C> {
         self.scale
     }
 
-    /// Local Newton on the curve analogue of Eq. (11), (p − r(t))·r'(t) = 0, from `t0`.
+    /// Local Newton on the curve analogue of Eq. (11), (p − r(t))·r'(t) = 0, from `t0`
+    /// (geom-db's [`CurveInverter::foot_from`]).
     pub fn project_from(&self, p: &Point3, t0: f64) -> CurveFoot {
-        let prob = CurveProblem {
-            c: self.curve,
-            p: *p,
-        };
-        let o = newton::minimise(
-            &prob,
-            [t0],
-            &[self.lo],
-            &[self.hi],
-            Settings {
-                tol: self.tol,
-                max_iters: self.opts.max_iters,
-            },
-        );
-        let pt = self.curve.point(o.x[0]);
-        CurveFoot {
-            t: o.x[0],
-            arc: interval_of(&self.edges, o.x[0]),
-            point: [pt.x, pt.y, pt.z],
-            distance: (pt - p).norm(),
-            on_boundary: o.active[0],
-            iterations: o.iters,
-            residual: o.eval.res,
-            converged: o.converged,
-            starts: 1,
-        }
+        self.inv.foot_from(p, t0)
     }
 
     fn nearest_sample(&self, cell: usize, p: &Point3) -> (f64, f64) {
@@ -803,7 +609,7 @@ impl<'a, C: ParamCurve + ?Sized> CurveProjector<'a, C> {
     pub fn project_indexed(&self, p: &Point3, index: usize) -> Result<CurveFoot> {
         if !p.iter().all(|c| c.is_finite()) {
             return Err(Error::NonFinitePoint {
-                entity: self.label.clone(),
+                entity: self.label().to_string(),
                 index,
             });
         }
@@ -831,7 +637,7 @@ impl<'a, C: ParamCurve + ?Sized> CurveProjector<'a, C> {
             let (_, t0) = self.nearest_sample(cell as usize, p);
             starts += 1;
             let f = self.project_from(p, t0);
-            if f.converged {
+            if f.report.converged {
                 if best.is_none_or(|b| f.distance < b.distance) {
                     best = Some(f);
                 }
@@ -845,10 +651,10 @@ impl<'a, C: ParamCurve + ?Sized> CurveProjector<'a, C> {
                 Ok(b)
             }
             None => Err(Error::ProjectionFailed {
-                entity: self.label.clone(),
+                entity: self.label().to_string(),
                 index,
-                iters: fail.map_or(0, |f| f.iterations),
-                residual: fail.map_or(f64::INFINITY, |f| f.residual),
+                iters: fail.map_or(0, |f| f.report.iterations),
+                residual: fail.map_or(f64::INFINITY, |f| f.report.residual),
                 tol: self.tol,
             }),
         }
@@ -944,31 +750,13 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceSetProjector<'a, S> {
     }
 }
 
-/// Local Newton for the foot of the normal on a curve over [lo, hi] (which may extend past
-/// the curve's domain: the end arcs are then extrapolated). Returns (t, distance, iterations,
-/// converged).
-pub(crate) fn curve_foot_local<C: ParamCurve + ?Sized>(
-    curve: &C,
-    p: &Point3,
-    t0: f64,
-    lo: f64,
-    hi: f64,
-    tol: f64,
-    max_iters: usize,
-) -> (f64, f64, usize, bool) {
-    let prob = CurveProblem { c: curve, p: *p };
-    let o = newton::minimise(&prob, [t0], &[lo], &[hi], Settings { tol, max_iters });
-    let d = (curve.point(o.x[0]) - p).norm();
-    (o.x[0], d, o.iters, o.converged)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn intervals_and_edges() {
-        let e = edges(0.0, 3.0, &[2.0, 1.0, 1.0, 5.0]);
+        let e = interval_edges(0.0, 3.0, &[2.0, 1.0, 1.0, 5.0]);
         assert_eq!(e, vec![0.0, 1.0, 2.0, 3.0]);
         assert_eq!(interval_of(&e, 0.0), 0);
         assert_eq!(interval_of(&e, 1.0), 1);

@@ -45,9 +45,9 @@
 //! identical for any number of threads.
 
 use crate::error::{Error, Result};
-use crate::newton::{self, Eval, Problem, Settings};
 use crate::project::{ProjectOptions, SurfaceProjector};
 use geom_db::eval::ParamSurface;
+use geom_db::newton::{self, Eval, Problem, Settings};
 use geom_db::prelude::{Point3, Vector3};
 use nalgebra::{SMatrix, SVector};
 use rayon::prelude::*;
@@ -261,11 +261,11 @@ impl IntersectionSeeds {
             let p = Point3::from(points[i].point);
             let (prev1, prev2) = (points[i - 1].uv1, points[i - 1].uv2);
             let l1 = s1.project_from(&p, prev1);
-            if l1.converged && l1.distance <= max_gap {
+            if l1.report.converged && l1.distance <= max_gap {
                 points[i].uv1 = l1.uv;
             }
             let l2 = s2.project_from(&p, prev2);
-            if l2.converged && l2.distance <= max_gap {
+            if l2.report.converged && l2.distance <= max_gap {
                 points[i].uv2 = l2.uv;
             }
         }
@@ -673,9 +673,9 @@ where
                 let lo3 = prob.reduce(&lo);
                 let hi3 = prob.reduce(&hi);
                 let o = newton::minimise(&prob, prob.reduce(&y0), &lo3, &hi3, settings);
-                frozen_iters = o.iters;
+                frozen_iters = o.report.iterations;
                 frozen_res = o.eval.res;
-                if o.converged {
+                if o.report.converged {
                     let y = prob.full(&o.x);
                     return Ok(finish(
                         s1,
@@ -684,7 +684,7 @@ where
                         p_old,
                         method_of(frozen),
                         frozen,
-                        o.iters,
+                        o.report.iterations,
                     ));
                 }
             }
@@ -695,7 +695,7 @@ where
                 t: v3(sp.tangent),
             };
             let o = newton::minimise(&prob, y0, &lo, &hi, settings);
-            if o.converged {
+            if o.report.converged {
                 return Ok(finish(
                     s1,
                     s2,
@@ -703,7 +703,7 @@ where
                     p_old,
                     Method::NormalPlane,
                     frozen,
-                    frozen_iters + o.iters,
+                    frozen_iters + o.report.iterations,
                 ));
             }
             Err(Error::CurveUpdateFailed {
@@ -711,7 +711,7 @@ where
                 point: i,
                 frozen_iters,
                 frozen_residual: frozen_res,
-                fallback_iters: o.iters,
+                fallback_iters: o.report.iterations,
                 fallback_residual: o.eval.res,
                 tol,
             })

@@ -34,7 +34,7 @@
 use crate::check::curve_surface_deviation;
 use crate::corner::{CornerOptions, solve_corner};
 use crate::error::{Error, Result};
-use crate::project::{ProjectOptions, SurfaceProjector, curve_foot_local};
+use crate::project::{ProjectOptions, SurfaceProjector};
 use crate::ssi::{IntersectionSeeds, SsiOptions, update_curve_points};
 use geom_db::eval::ParamCurve;
 use geom_db::prelude::{Point3, Vector3};
@@ -453,7 +453,9 @@ impl ModelBaseline {
             if !curve_changed[c.index()] && (curve.point(t) - p).norm() <= tol {
                 continue;
             }
-            let (tn, dist, _, _) = curve_foot_local(curve, &p, t, 0.0, n, tol, 50);
+            let settings = geom_db::newton::Settings { tol, max_iters: 50 };
+            let o = geom_db::invert::foot_on_curve(curve, &p, t, 0.0, n, settings);
+            let (tn, dist) = (o.x[0], (curve.point(o.x[0]) - p).norm());
             if dist.is_nan() || dist > meet {
                 return Err(Error::CornerOffCurve {
                     corner: corner_label(init, kid),

@@ -158,9 +158,9 @@ pub(crate) fn boundary_params(
                     None if k == 0 => proj.project_from(&p, seed),
                     None => {
                         let mut f = proj.project_from(&p, prev);
-                        if !f.converged || f.distance > tol {
+                        if !f.report.converged || f.distance > tol {
                             let h = proj.project(&p)?;
-                            if h.distance < f.distance || !f.converged {
+                            if h.distance < f.distance || !f.report.converged {
                                 f = h;
                             }
                         }
@@ -179,7 +179,7 @@ pub(crate) fn boundary_params(
                                 let t = a + (b - a) * j as f64 / 8.0;
                                 proj.project_from(&p, side.uv(dom, t, 1e-3 * s_range))
                             })
-                            .filter(|f| f.converged && f.distance <= tol)
+                            .filter(|f| f.report.converged && f.distance <= tol)
                             .collect();
                         feet.push(proj.project(&p)?);
                         feet.into_iter()
@@ -222,7 +222,7 @@ pub(crate) fn boundary_params(
         let f1 = proj.project_from(&p0, last);
         let jump = (f1.uv[0] - f0.uv[0]).abs().max((f1.uv[1] - f0.uv[1]).abs());
         let span = (dom.0[1] - dom.0[0]).max(dom.1[1] - dom.1[0]);
-        if f1.converged && f1.distance <= tol && jump > 1e-6 * span {
+        if f1.report.converged && f1.distance <= tol && jump > 1e-6 * span {
             nodes = walk(f1.uv)?.0;
         }
         out.push(nodes);

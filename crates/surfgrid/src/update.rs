@@ -252,9 +252,9 @@ fn update_with(
             }
             let pr = proj.as_ref().expect("set above");
             let mut f = pr.project_from(&out.coords[g], uv[k]);
-            if !f.converged || f.distance > tol {
+            if !f.report.converged || f.distance > tol {
                 let h = pr.project(&out.coords[g])?;
-                if !f.converged || h.distance < f.distance {
+                if !f.report.converged || h.distance < f.distance {
                     f = h;
                 }
             }

@@ -203,7 +203,14 @@ fn slide_on_geometry_supports_from_parametric_msh() {
     ];
     for &v in &inner {
         let x = geom_db::prelude::Vector3::from(m.coords[v as usize]);
-        let (uv, dist) = deform::support::project_surface(side, x, None);
+        let inv = geom_db::invert::SurfaceInverter::new(
+            "side",
+            side,
+            &geom_db::invert::InvertOptions::for_model(&db),
+        )
+        .unwrap();
+        let f = inv.project(&geom_db::prelude::Point3::from(x)).unwrap();
+        let (uv, dist) = (f.uv, f.distance);
         assert!(dist < 1e-9);
         let q = geom_db::eval::ParamSurface::point(side, uv[0], uv[1]);
         m.coords[v as usize] = [q.x, q.y, q.z];

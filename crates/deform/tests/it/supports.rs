@@ -275,7 +275,14 @@ fn nodes_slide_on_the_cylinder_fixture_and_stay_on_it() {
     }
     for &v in &inner {
         let x = Vector3::from(m.coords[v as usize]);
-        let (uv, dist) = deform::support::project_surface(&db.surfaces[side], x, None);
+        let inv = geom_db::invert::SurfaceInverter::new(
+            "side",
+            &db.surfaces[side],
+            &geom_db::invert::InvertOptions::for_model(&db),
+        )
+        .unwrap();
+        let f = inv.project(&Point3::from(x)).unwrap();
+        let (uv, dist) = (f.uv, f.distance);
         assert!(dist < 1e-9, "node {v}: {dist:e} from the side surface");
         let q = db.surfaces[side].point(uv[0], uv[1]);
         m.coords[v as usize] = [q.x, q.y, q.z];

@@ -11,11 +11,11 @@ use super::roles;
 use super::{
     EdgeReport, EntityConversion, Error, FaceReport, ImportOptions, ImportReport, ShellReport,
 };
-use crate::check::Projector;
 use crate::curve::{Arc, SupportCurve};
 use crate::db::GeomDb;
 use crate::eval::ParamSurface;
 use crate::ids::{CornerId, CurveCompId, CurveId, SurfaceId};
+use crate::invert::{InvertOptions, SurfaceInverter};
 use crate::merge::PointMerger;
 use crate::prelude::Point3;
 use crate::surface::{Side, SupportSurface};
@@ -918,13 +918,16 @@ pub fn import(file: &IgesFile, opts: &ImportOptions) -> Result<(GeomDb, ImportRe
     }
 
     // Surface components with loops; initial orientation from the outer loop's winding.
-    let projectors: Vec<Projector> = surfaces.iter().map(Projector::new).collect();
+    let inv_opts = InvertOptions::new(size);
+    let projectors: Vec<Option<SurfaceInverter<'_, SupportSurface>>> = surfaces
+        .iter()
+        .map(|s| SurfaceInverter::new("", s, &inv_opts).ok())
+        .collect();
     let loop_poly = |fi: usize,
                      lp: &[(usize, bool)],
                      loops: &[OrientedCurve],
                      db: &GeomDb|
      -> Vec<(f64, f64)> {
-        let s = &surfaces[face_surface[fi]];
         let pr = &projectors[face_surface[fi]];
         let mut poly = Vec::new();
         for oc in loops {
@@ -935,7 +938,8 @@ pub fn import(file: &IgesFile, opts: &ImportOptions) -> Result<(GeomDb, ImportRe
                 let s_ = k as f64 / n as f64;
                 let f = if oc.reversed { 1.0 - s_ } else { s_ };
                 let p = arcs_point(arcs, cc.param_at(f));
-                poly.push(pr.project(s, &p).0);
+                let uv = pr.as_ref().and_then(|pr| pr.nearest_indexed(&p, k).ok());
+                poly.push(uv.map_or((f64::NAN, f64::NAN), |f| (f.uv[0], f.uv[1])));
             }
         }
         let _ = lp;

@@ -31,7 +31,7 @@ fn sphere_feet_are_exact() {
         let p = s.c + dir * rho;
         let f = proj.project(&p).unwrap();
         let exact = s.c + dir * s.r;
-        assert!(f.converged && !f.on_boundary, "{f:?}");
+        assert!(f.report.converged && !f.on_boundary, "{f:?}");
         assert_close!(f.distance, (rho - s.r).abs(), abs = 1e-12);
         assert_close!(f.point, [exact.x, exact.y, exact.z], abs = 1e-11);
         assert_close!(f.uv, [az, pol], abs = 1e-9);
@@ -76,7 +76,7 @@ fn torus_patch_set_feet_cross_patch_borders() {
         }
         let uv0 = [f.uv[0] + 0.9, f.uv[1]];
         let g = proj.project_from(&p, uv0);
-        if g.converged && !g.on_boundary && proj.patch_of(uv0)[0] != f.patch[0] {
+        if g.report.converged && !g.on_boundary && proj.patch_of(uv0)[0] != f.patch[0] {
             cross += 1;
             assert_close!(g.distance, dist, abs = 1e-12);
         }
@@ -91,7 +91,7 @@ fn foot_on_the_domain_boundary_is_reported() {
     let proj = SurfaceProjector::new("plane", &pl, &ProjectOptions::default()).unwrap();
     // beyond the edge u = 1: the foot is on the boundary, the normal condition holds in v only
     let f = proj.project(&Point3::new(1.5, 0.25, 0.3)).unwrap();
-    assert!(f.on_boundary && f.converged);
+    assert!(f.on_boundary && f.report.converged);
     assert_close!(f.uv, [1.0, 0.25], abs = 1e-14);
     assert_close!(f.distance, (0.25f64 + 0.09).sqrt(), rel = 1e-14);
     // inside: interior foot

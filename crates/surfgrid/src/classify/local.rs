@@ -89,7 +89,7 @@ pub(super) fn component_grid(
                 NodeSupport::Surface { uv, .. } => uv,
                 _ => {
                     let f = pr.project_from(&coords[v as usize], seed);
-                    if !f.converged || f.distance > tol {
+                    if !f.report.converged || f.distance > tol {
                         pr.project_indexed(&coords[v as usize], v as usize)?.uv
                     } else {
                         f.uv

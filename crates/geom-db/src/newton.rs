@@ -1,20 +1,33 @@
-//! A safeguarded, box-constrained Newton minimiser in a few parameters, shared by the foot of
-//! the normal (Eq. 11), the curve update (Eq. 12, as least squares) and corners (Eq. 13).
+//! The safeguarded, box-constrained Newton minimiser in a few parameters: the one Newton of
+//! the workspace. It serves the foot of the normal (Eq. 11, [`crate::invert`]), the
+//! support-curve update (Eq. 12, as least squares) and corners (Eq. 13) in `intersect`, the
+//! sliding boundary nodes of `deform` and the fixtures of `xtask`.
 //!
 //! Each iteration: the active set (parameters at a bound whose gradient pushes outward) is
 //! frozen; the reduced Newton system H_FF δ_F = −g_F is solved by Cholesky, with a
-//! Levenberg–Marquardt shift μI added (μ growing ×100) while H_FF is not positive definite;
-//! the step is projected onto the parameter box and halved until the Armijo condition holds
-//! (or, at round-off level, until the residual decreases without increasing f). Iterations are
-//! bounded; convergence is decided on a problem-specific residual in length units.
+//! Levenberg–Marquardt shift μI added (μ = 1e-10 max diag H, growing ×100) while H_FF + μI is
+//! not positive definite or δ is not a descent direction; the step is projected onto the
+//! parameter box and halved until the Armijo condition f(x + αδ) ≤ f(x) + 1e-4 α g·δ holds
+//! (or, at round-off level, where differences of f are noise, until the residual decreases
+//! without f rising above its noise). Iterations are bounded; convergence is decided on a
+//! problem-specific residual in length units against an absolute tolerance that the caller
+//! derives from the model size. After convergence up to three polishing steps are taken
+//! (kept while the residual halves), so residuals usually end at round-off.
+//!
+//! When no descent is possible any more (round-off, or bounds that clamp the step to nothing)
+//! or the iterations are spent, a residual within 16× the tolerance is accepted as converged
+//! and reported as it is ([`NewtonReport`]).
 
 use nalgebra::{SMatrix, SVector};
 
 /// Objective value, gradient and (approximate) Hessian at a point.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Eval<const N: usize> {
+pub struct Eval<const N: usize> {
+    /// f(x).
     pub f: f64,
+    /// ∇f(x).
     pub g: SVector<f64, N>,
+    /// The Hessian of f, or an approximation (Gauss–Newton JᵀJ for least squares).
     pub h: SMatrix<f64, N, N>,
     /// Residual in length units (problem-specific), computed with the active set.
     pub res: f64,
@@ -23,26 +36,46 @@ pub(crate) struct Eval<const N: usize> {
 }
 
 /// A minimisation problem in N bounded parameters.
-pub(crate) trait Problem<const N: usize> {
-    /// f, ∇f, H and the residual at x; `active[i]` tells that parameter i is held at a bound.
+pub trait Problem<const N: usize> {
+    /// f, ∇f, H and the residual at x; `active[i]` tells that parameter i is held at a bound
+    /// (the residual should then ignore that parameter's stationarity condition).
     fn eval(&self, x: &[f64; N], active: &[bool; N]) -> Eval<N>;
+}
+
+/// Settings of [`minimise`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// Absolute tolerance of the residual (length units; derive it from the model size).
+    pub tol: f64,
+    /// Largest number of Newton iterations.
+    pub max_iters: usize,
+}
+
+/// How a Newton solve ended.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct NewtonReport {
+    /// The residual is within the tolerance (or within 16× it where no descent is possible
+    /// any more, see the module documentation).
+    pub converged: bool,
+    /// Newton iterations made.
+    pub iterations: usize,
+    /// Final residual (length units).
+    pub residual: f64,
+    /// The tolerance the residual was held to.
+    pub tolerance: f64,
 }
 
 /// Outcome of [`minimise`].
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Outcome<const N: usize> {
+pub struct Outcome<const N: usize> {
+    /// The final parameters (inside the box).
     pub x: [f64; N],
+    /// The evaluation at `x`.
     pub eval: Eval<N>,
-    pub iters: usize,
-    pub converged: bool,
+    /// Parameters held at a bound at the end.
     pub active: [bool; N],
-}
-
-/// Settings of [`minimise`].
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Settings {
-    pub tol: f64,
-    pub max_iters: usize,
+    /// Convergence, iterations and residual.
+    pub report: NewtonReport,
 }
 
 fn active_set<const N: usize>(
@@ -100,8 +133,24 @@ fn newton_step<const N: usize>(e: &Eval<N>, active: &[bool; N]) -> Option<SVecto
     None
 }
 
-/// Minimises f over the box [lo, hi] from x0.
-pub(crate) fn minimise<const N: usize, P: Problem<N>>(
+/// Minimises f over the box [lo, hi] from x0 (clamped into the box first).
+///
+/// ```
+/// use geom_db::newton::{Eval, Problem, Settings, minimise};
+/// use nalgebra::{SMatrix, SVector};
+/// // f(x) = ½ (x − 2)², x ∈ [0, 1]: the minimum is on the bound x = 1
+/// struct P;
+/// impl Problem<1> for P {
+///     fn eval(&self, x: &[f64; 1], active: &[bool; 1]) -> Eval<1> {
+///         let g = x[0] - 2.0;
+///         Eval { f: 0.5 * g * g, g: SVector::<f64, 1>::new(g), h: SMatrix::<f64, 1, 1>::new(1.0),
+///                res: if active[0] { 0.0 } else { g.abs() }, fnoise: 0.0 }
+///     }
+/// }
+/// let o = minimise(&P, [0.0], &[0.0], &[1.0], Settings { tol: 1e-12, max_iters: 20 });
+/// assert!(o.report.converged && o.x[0] == 1.0 && o.active[0]);
+/// ```
+pub fn minimise<const N: usize, P: Problem<N> + ?Sized>(
     prob: &P,
     x0: [f64; N],
     lo: &[f64; N],
@@ -116,6 +165,12 @@ pub(crate) fn minimise<const N: usize, P: Problem<N>>(
     e = prob.eval(&x, &active);
     let mut iters = 0;
     let mut stalled = false;
+    let report = |e: &Eval<N>, iters: usize, converged: bool| NewtonReport {
+        converged,
+        iterations: iters,
+        residual: e.res,
+        tolerance: s.tol,
+    };
     while iters < s.max_iters {
         if e.res <= s.tol {
             // one polishing step: Newton converges quadratically, so a last full step takes
@@ -145,9 +200,8 @@ pub(crate) fn minimise<const N: usize, P: Problem<N>>(
             return Outcome {
                 x,
                 eval: e,
-                iters,
-                converged: true,
                 active,
+                report: report(&e, iters, true),
             };
         }
         iters += 1;
@@ -196,12 +250,12 @@ pub(crate) fn minimise<const N: usize, P: Problem<N>>(
     // the iterations spent while still improving at round-off level (e.g. at a corner of the
     // domain): a residual within 16× the tolerance is accepted as converged and reported as
     // it is.
+    let converged = e.res <= s.tol || ((stalled || iters >= s.max_iters) && e.res <= 16.0 * s.tol);
     Outcome {
         x,
         eval: e,
-        iters,
-        converged: e.res <= s.tol || ((stalled || iters >= s.max_iters) && e.res <= 16.0 * s.tol),
         active,
+        report: report(&e, iters, converged),
     }
 }
 
@@ -244,13 +298,26 @@ mod tests {
             max_iters: 100,
         };
         let o = minimise(&Quad, [0.0, 0.0], &[-10.0, -10.0], &[10.0, 10.0], s);
-        assert!(o.converged);
+        assert!(o.report.converged);
         assert!((o.x[0] - 3.0).abs() < 1e-10 && (o.x[1] - 2.25).abs() < 1e-10);
         // with x ≤ 2 the optimum is at x = 2, y = 1, bound active
         let o = minimise(&Quad, [0.0, 0.0], &[-10.0, -10.0], &[2.0, 10.0], s);
-        assert!(o.converged, "{o:?}");
+        assert!(o.report.converged, "{o:?}");
         assert_eq!(o.x[0], 2.0);
         assert!((o.x[1] - 1.0).abs() < 1e-10);
         assert!(o.active[0] && !o.active[1]);
+    }
+
+    #[test]
+    fn bounded_iterations_report_failure() {
+        let s = Settings {
+            tol: 1e-14,
+            max_iters: 2,
+        };
+        let o = minimise(&Quad, [-8.0, 9.0], &[-10.0, -10.0], &[10.0, 10.0], s);
+        assert!(!o.report.converged);
+        assert_eq!(o.report.iterations, 2);
+        assert!(o.report.residual > 16.0 * s.tol);
+        assert_eq!(o.report.tolerance, 1e-14);
     }
 }
