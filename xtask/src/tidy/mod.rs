@@ -84,11 +84,16 @@ pub const GEOMETRY_AND_GRID: &[Knows] = &[
             "CurveCompId",
             "SurfaceId",
             "SurfCompId",
+            "SupportCurve",
+            "SupportSurface",
             "eval",
+            "invert",
+            "newton",
             "prelude",
         ],
         intersect: &[],
-        why: "evaluates the support a sliding node lies on (Eqs. 27-33)",
+        why: "evaluates the support a sliding node lies on (Eqs. 27-33) and puts the node back \
+              on it by geom-db's foot of the normal (Eq. 11) on that one known support",
     },
     Knows {
         krate: "aeroshape",
@@ -134,10 +139,6 @@ pub const LONG_FILE_EXCEPTIONS: &[(&str, &str)] = &[
     (
         "crates/geom-db/src/import/topo.rs",
         "import staging in progress (issue 21, item 4)",
-    ),
-    (
-        "crates/intersect/src/project.rs",
-        "point inversion moves to geom-db (issue 21, item 2)",
     ),
     (
         "crates/mesh/src/msh.rs",
