@@ -6,8 +6,18 @@ use std::process::Command;
 
 /// The subjects longer than `max` characters of the commits reachable from HEAD and not
 /// from `base`, other than the commits (full hashes) in `exceptions`; a problem too when git
-/// cannot list them (no repository, `base` unknown).
+/// cannot list them (no repository, `base` unknown). In a shallow clone, where the history
+/// since `base` is absent, the rule is skipped with a note on standard error.
 pub fn subjects(root: &Path, base: &str, max: usize, exceptions: &[&str]) -> Vec<String> {
+    let shallow = Command::new("git")
+        .args(["rev-parse", "--is-shallow-repository"])
+        .current_dir(root)
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "true");
+    if shallow {
+        eprintln!("tidy: shallow clone, commit subjects since {base} not checked");
+        return Vec::new();
+    }
     let out = Command::new("git")
         .args(["log", "--format=%H%x09%s", &format!("{base}..HEAD")])
         .current_dir(root)
