@@ -133,10 +133,6 @@ pub const MAX_LINES: usize = 900;
 /// Library files over [`MAX_LINES`] lines whose split is pending, with the reason.
 pub const LONG_FILE_EXCEPTIONS: &[(&str, &str)] = &[
     (
-        "crates/geom-db/src/import/topo.rs",
-        "import staging in progress (issue 21, item 4)",
-    ),
-    (
         "crates/mesh/src/msh.rs",
         "MSH 4.1 reader and writer; split pending",
     ),

@@ -21,9 +21,11 @@ const MAX_ARCS: usize = 4096;
 /// Largest number of patches per surface.
 const MAX_PATCHES: usize = 16384;
 
-/// Arcs approximating a curve and the source parameters of their ends.
+/// Arcs approximating a curve, each with the source parameter interval it covers.
 pub(crate) struct CurveFit {
-    pub arcs: Vec<Arc>,
+    /// (a, b, arc): local u ∈ [0, 1] of the arc ↦ a + u (b − a).
+    pub pieces: Vec<(f64, f64, Arc)>,
+    /// Largest sampled error (between the nodes).
     pub max_error: f64,
 }
 
@@ -55,7 +57,7 @@ pub(crate) fn fit_curve(
     tol: f64,
 ) -> Result<CurveFit, f64> {
     let deg = CURVE_DEGREE;
-    let mut arcs = Vec::new();
+    let mut arcs: Vec<(f64, f64, Arc)> = Vec::new();
     let mut max_error: f64 = 0.0;
     for w in initial.windows(2) {
         // Depth-first bisection keeps the arcs in parameter order.
@@ -73,16 +75,25 @@ pub(crate) fn fit_curve(
                 return Err(err);
             }
             max_error = max_error.max(err);
-            arcs.push(arc);
+            arcs.push((a, b, arc));
         }
     }
-    Ok(CurveFit { arcs, max_error })
+    Ok(CurveFit {
+        pieces: arcs,
+        max_error,
+    })
 }
 
 /// Patches approximating r(u, v) and the source parameters of the patch grid lines.
 pub(crate) struct SurfaceFit {
+    /// The patch grid.
     pub surface: SupportSurface,
+    /// Largest sampled error (between the nodes).
     pub max_error: f64,
+    /// Source u at the patch columns' borders.
+    pub u_breaks: Vec<f64>,
+    /// Source v at the patch rows' borders.
+    pub v_breaks: Vec<f64>,
 }
 
 struct PatchResult {
@@ -159,6 +170,8 @@ pub(crate) fn fit_surface(
             return Ok(SurfaceFit {
                 surface: SupportSurface::new("", nu, nv, patches),
                 max_error,
+                u_breaks: ub,
+                v_breaks: vb,
             });
         }
         let mut split_u = vec![false; nu];
@@ -202,13 +215,13 @@ mod tests {
         let f = |t: f64| Point3::new(t.cos(), t.sin(), 0.0);
         let fit = fit_curve(&f, &[0.0, std::f64::consts::PI], 1e-9).unwrap();
         assert!(fit.max_error <= 1e-9);
-        assert!(fit.arcs.len() >= 2);
+        assert!(fit.pieces.len() >= 2);
         // Independent check on a fine grid: distance to the unit circle.
         for k in 0..=1000 {
-            let t = k as f64 / 1000.0 * fit.arcs.len() as f64;
-            let (a, u) = ((t.floor() as usize).min(fit.arcs.len() - 1), 0.0);
-            let u = t - a as f64 + u;
-            let p = fit.arcs[a].point(u);
+            let t = k as f64 / 1000.0 * fit.pieces.len() as f64;
+            let a = (t.floor() as usize).min(fit.pieces.len() - 1);
+            let u = t - a as f64;
+            let p = fit.pieces[a].2.point(u);
             assert!((p.coords.norm() - 1.0).abs() < 2e-9);
         }
     }

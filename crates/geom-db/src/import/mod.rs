@@ -1,82 +1,94 @@
-//! IGES → geometric database: conversion of curves and surfaces to power-basis arcs and
-//! patches (Eqs. 2–10) and topology by sewing (§2.1).
+//! CAD import: IGES and STEP files → one neutral model of exact geometry → the geometric
+//! database (power-basis arcs and patches, Eqs. 2–10; topology by sewing, §2.1).
 //!
-//! * Exact conversions: 110 lines, 112 spline segments (re-parametrised to [0, 1] per
-//!   segment: a_k = c_k h^k), 114 patches (a_{pq} = c_{pq} h_u^p h_v^q), non-rational 126 and
-//!   128 by Bézier extraction per knot span ([`convert`](crate::convert)).
-//! * Approximations (100, 104, 118, 120, 122, rational 126/128, B-splines restricted to part
-//!   of their knot domain): interpolation at the control nodes of each arc (patch), split
-//!   until the sampled error is within the tolerance (module `approx`).
-//! * Faces: 144 trimmed surfaces (142 boundaries), 143 bounded surfaces (141 boundaries),
-//!   510 B-rep faces (508 loops over 504 edges), and untrimmed independent surfaces. Each face
-//!   becomes a surface component; each boundary curve piece an edge.
-//! * Sewing: edge end points within the sewing tolerance become one corner; edges joining the
-//!   same corners whose samples lie within the tolerance of each other become one curve
-//!   component, shared by the faces that use it (with opposite orientations once the faces
-//!   are oriented consistently). Free and non-manifold edges are reported.
-//! * Orientation: each face's inward sign is first chosen so that its outer loop runs
-//!   counter-clockwise about the inward normal (the loop convention of
-//!   [`topology`](crate::topology)); faces are then flipped, by a breadth-first walk over shared
-//!   edges, so that neighbours traverse their common edge in opposite directions; finally
-//!   each connected shell is flipped so that its enclosed volume, V = ⅓ ∮ x·n dA computed
-//!   with Green's theorem in each face's parameter plane, is negative for the largest shell
-//!   (the far field: normals point into the fluid it encloses) and positive for the others
-//!   (bodies: normals point away from them). [`ImportOptions::flip`] reverses everything.
-//! * Roles ([`recognise`]): each face is recognised as a symmetry plane, the far field, or
-//!   part of a wing or another body, and its surface component named `<role>.D<line>`.
-//! * The way back ([`to_iges`]): support surfaces as 114 (bicubic or lower) or 128, surface
-//!   components as 144 trimmed surfaces with 142 boundaries over 112/126 model curves.
+//! * Front ends: `from_iges` reads IGES 5.3 entities (curves 100, 102, 104, 106, 110,
+//!   112, 126, 130, 142; surfaces 108, 114, 118, 120, 122, 128, 140, 190–198; faces 144, 143,
+//!   bounded 108, 510 in 514 shells of 186 solids, independent surfaces), `from_step` the
+//!   B-rep of AP203/AP214/AP242 (solids, shell-based surface models, advanced faces over edge
+//!   loops, elementary, B-spline, swept and offset surfaces, lines, conics, B-spline, trimmed,
+//!   composite, offset and surface curves) with its length and angle units.
+//! * [`model`]: the neutral intermediate ([`CadModel`]): exact curves and surfaces
+//!   (NURBS, analytic, revolution, extrusion, ruled, offset), faces with loops of edge uses,
+//!   shells; each item names its source entity.
+//! * [`stage`]: the conversion as named stages — faces with exact geometry (trimming box,
+//!   support surfaces), edges, loops, corners, T-junctions, sewing, orientation, shells,
+//!   database — each documented in its file.
+//! * Units: the file's length unit is honoured and reported; [`ImportOptions::units`]
+//!   converts to another.
+//! * Roles ([`recognise`]): symmetry plane, far field, wing or body, naming each surface
+//!   component `<role>.<entity>` (e.g. `wing.D31`, `body.#17`).
+//! * The way back ([`to_iges`]): support surfaces as 114 or 128, surface components as 144
+//!   trimmed surfaces with 142 boundaries over 112/126 model curves.
 
 // `!(x > 0.0)` deliberately rejects NaN as well as non-positive values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod approx;
 mod export;
-mod geometry;
+mod from_iges;
+mod from_step;
+pub mod model;
+mod report;
 mod roles;
+pub mod stage;
 #[cfg(test)]
 mod tests;
-mod topo;
-
-use serde::Serialize;
 
 pub use export::to_iges;
+pub use model::{CadModel, LengthUnit};
+pub use report::{EdgeReport, EntityConversion, FaceReport, ImportReport, ShellReport};
 pub use roles::{FaceRole, recognise};
-pub use topo::import;
 
-/// Errors of the IGES import. Every message is one line naming the file and, where there is
-/// one, the entity's directory line.
+use crate::db::GeomDb;
+
+/// Errors of the import. Every message is one line naming the file and, where there is
+/// one, the entity (IGES directory line, STEP instance).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
     /// The IGES file could not be read.
     #[error(transparent)]
     Iges(#[from] iges::Error),
+    /// The STEP file could not be read, or one of its instances is wrong.
+    #[error(transparent)]
+    Step(#[from] step::Error),
     /// An entity cannot be converted.
     ///
     /// ```
     /// use iges::{Entity, Global, IgesFile, Line};
     /// let mut f = IgesFile::new(Global::default());
     /// f.name = "x.igs".into();
-    /// f.push_with(Entity::Line(Line { start: [0.0; 3], end: [1.0, 0.0, 0.0] }), 1, None);
+    /// let l = f.push(Entity::Line(Line { start: [0.0; 3], end: [1.0, 0.0, 0.0] }));
+    /// let p = f.push(Entity::Plane(iges::Plane {
+    ///     coefficients: [0.0, 0.0, 1.0, 0.0],
+    ///     boundary: Some(l),
+    ///     symbol_location: [0.0; 3],
+    ///     symbol_size: 0.0,
+    /// }));
+    /// f.entities[p.index()].de.form = 1;
     /// let err = geom_db::import::import(&f, &Default::default()).unwrap_err();
-    /// assert!(matches!(err, geom_db::import::Error::Model { .. }), "{err}");
+    /// assert!(matches!(err, geom_db::import::Error::Entity { .. }), "{err}");
+    /// assert!(err.to_string().starts_with("x.igs: entity at D line 3 (type 108)"), "{err}");
     /// ```
-    #[error("{file}: entity at D line {de} (type {entity_type}): {reason}")]
+    #[error("{file}: {entity}: {reason}")]
     Entity {
-        /// The IGES file.
+        /// The CAD file.
         file: String,
-        /// Sequence number of the entity's first directory line.
-        de: u32,
-        /// Entity type number.
-        entity_type: i32,
+        /// The entity: `entity at D line 37 (type 144)` or `#37 (ADVANCED_FACE)`.
+        entity: String,
         /// What is wrong.
         reason: String,
     },
-    /// The model as a whole cannot be imported (no faces, ...).
+    /// The model as a whole cannot be imported (no faces, no unit to convert from, ...).
+    ///
+    /// ```
+    /// let f = iges::IgesFile::new(iges::Global::default());
+    /// let err = geom_db::import::import(&f, &Default::default()).unwrap_err();
+    /// assert!(matches!(err, geom_db::import::Error::Model { .. }), "{err}");
+    /// ```
     #[error("{file}: {reason}")]
     Model {
-        /// The IGES file.
+        /// The CAD file.
         file: String,
         /// What is wrong.
         reason: String,
@@ -84,22 +96,22 @@ pub enum Error {
     /// The database built from the file does not validate.
     #[error("{file}: the imported model does not validate: {source}")]
     Invalid {
-        /// The IGES file.
+        /// The CAD file.
         file: String,
         /// The validation error.
         source: Box<crate::Error>,
     },
 }
 
-/// Options of [`import`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Options of the import.
+#[derive(Debug, Clone, PartialEq)]
 pub struct ImportOptions {
-    /// Approximation tolerance in model units; `None`: `rel_tolerance` × model size.
+    /// Approximation tolerance in output units; `None`: `rel_tolerance` × model size.
     pub tolerance: Option<f64>,
     /// Approximation tolerance relative to the model size (bounding-box diagonal), default
     /// 1e-7.
     pub rel_tolerance: f64,
-    /// Sewing tolerance (corners and coincident edges) in model units; `None`:
+    /// Sewing tolerance (corners and coincident edges) in output units; `None`:
     /// `rel_sew_tolerance` × model size, but at least 10 × the approximation tolerance.
     pub sew_tolerance: Option<f64>,
     /// Sewing tolerance relative to the model size, default 1e-6 (the gap tolerance of
@@ -107,6 +119,9 @@ pub struct ImportOptions {
     pub rel_sew_tolerance: f64,
     /// Reverse every surface component's orientation after the automatic choice.
     pub flip: bool,
+    /// Convert lengths to this unit (`None`: keep the file's). A file that declares no
+    /// unit cannot be converted.
+    pub units: Option<LengthUnit>,
 }
 
 impl Default for ImportOptions {
@@ -117,6 +132,7 @@ impl Default for ImportOptions {
             sew_tolerance: None,
             rel_sew_tolerance: 1e-6,
             flip: false,
+            units: None,
         }
     }
 }
@@ -133,102 +149,100 @@ impl ImportOptions {
         self.flip = flip;
         self
     }
+
+    /// Sets the output unit ([`units`](Self::units)).
+    pub fn with_units(mut self, units: LengthUnit) -> Self {
+        self.units = Some(units);
+        self
+    }
 }
 
-/// How one IGES entity was converted.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct EntityConversion {
-    /// Directory line of the entity.
-    pub de: u32,
-    /// Entity type number.
-    pub entity_type: i32,
-    /// `"exact"` or `"approximated"`.
-    pub method: &'static str,
-    /// Arcs or patches produced.
-    pub pieces: usize,
-    /// Largest sampled distance between the entity and its conversion (0 when exact).
-    pub max_error: f64,
+/// Converts an IGES file into a validated geometric database.
+///
+/// Every face (144, 143, 510, bounded 108, or an independent untrimmed surface) becomes a
+/// surface component over a support surface; boundary curves become curve components,
+/// shared between faces where they coincide within the sewing tolerance. See [`stage`].
+pub fn import(
+    file: &iges::IgesFile,
+    opts: &ImportOptions,
+) -> Result<(GeomDb, ImportReport), Error> {
+    import_model(from_iges::model(file)?, opts)
 }
 
-/// One face of the import.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FaceReport {
-    /// Directory line of the face entity (144, 143, 510 or the untrimmed surface).
-    pub de: u32,
-    /// Its type number.
-    pub entity_type: i32,
-    /// Directory line of its surface.
-    pub surface_de: u32,
-    /// The surface component built (index).
-    pub component: usize,
-    /// Number of loops.
-    pub loops: usize,
-    /// Inward normal: `"positive"` (r_u × r_v) or `"negative"`.
-    pub inward: &'static str,
-    /// Index of the shell (connected set of faces) it belongs to.
-    pub shell: usize,
-    /// What the face is ([`FaceRole::name`]): `symmetry`, `farfield`, `wing`, `body`, …
-    /// The surface component is named `<role>.D<line>` (e.g. `wing.D31`).
-    pub role: String,
+/// Converts a STEP file into a validated geometric database (see [`import`]).
+pub fn import_step(
+    file: &step::StepFile,
+    opts: &ImportOptions,
+) -> Result<(GeomDb, ImportReport), Error> {
+    import_model(from_step::model(file)?, opts)
 }
 
-/// A connected set of faces.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ShellReport {
-    /// Number of faces.
-    pub faces: usize,
-    /// True when every edge of the shell is shared by exactly two of its faces.
-    pub closed: bool,
-    /// Enclosed volume with the final normals (negative: normals point into the volume).
-    pub volume: f64,
-    /// Bounding-box diagonal of its faces' edges.
-    pub size: f64,
+/// Reads and converts a CAD file held in memory: STEP when it starts with
+/// `ISO-10303-21`, IGES otherwise. `name` is used in messages.
+pub fn import_bytes(
+    bytes: &[u8],
+    name: &str,
+    opts: &ImportOptions,
+) -> Result<(GeomDb, ImportReport), Error> {
+    if is_step(bytes) {
+        import_step(&step::parse(bytes, name)?, opts)
+    } else {
+        import(&iges::parse(bytes, name)?, opts)
+    }
 }
 
-/// An edge used by one face only, or by more than two.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct EdgeReport {
-    /// The curve component.
-    pub component: usize,
-    /// Directory lines of the IGES curves merged into it.
-    pub curves: Vec<u32>,
-    /// Directory lines of the faces using it.
-    pub faces: Vec<u32>,
+/// True when the bytes start (after blanks or a byte-order mark) with `ISO-10303-21`.
+pub fn is_step(bytes: &[u8]) -> bool {
+    let b = bytes.strip_prefix(&[0xEF, 0xBB, 0xBF][..]).unwrap_or(bytes);
+    let start = b
+        .iter()
+        .position(|c| !c.is_ascii_whitespace())
+        .unwrap_or(b.len());
+    b[start..].len() >= 12 && b[start..start + 12].eq_ignore_ascii_case(b"ISO-10303-21")
 }
 
-/// What [`import`] did.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ImportReport {
-    /// The IGES file.
-    pub file: String,
-    /// Model units from the Global section ("mm", "m", ...), if recognised.
-    pub units: Option<String>,
-    /// Model size (bounding-box diagonal of the faces' surfaces, sampled).
-    pub reference_length: f64,
-    /// Approximation tolerance used (model units).
-    pub tolerance: f64,
-    /// Sewing tolerance used (model units).
-    pub sew_tolerance: f64,
-    /// Per converted curve and surface entity.
-    pub entities: Vec<EntityConversion>,
-    /// Largest conversion error over all entities.
-    pub max_error: f64,
-    /// Faces, in surface-component order.
-    pub faces: Vec<FaceReport>,
-    /// Connected shells.
-    pub shells: Vec<ShellReport>,
-    /// Number of curve components.
-    pub curve_components: usize,
-    /// Curve components shared by two faces.
-    pub sewn_edges: usize,
-    /// Largest distance between merged boundary curves or corners.
-    pub max_sew_gap: f64,
-    /// Edges used by one face only (open model, e.g. a symmetry plane).
-    pub free_edges: Vec<EdgeReport>,
-    /// Edges used by more than two faces.
-    pub non_manifold_edges: Vec<EdgeReport>,
-    /// Shared edges whose two faces could not be oriented consistently.
-    pub orientation_conflicts: usize,
-    /// Entities skipped or not fully understood.
-    pub warnings: Vec<String>,
+/// Converts a neutral model into a validated geometric database: the unit conversion, then
+/// the stages of [`stage`].
+pub fn import_model(
+    mut model: CadModel,
+    opts: &ImportOptions,
+) -> Result<(GeomDb, ImportReport), Error> {
+    let (scale, units) = match (&opts.units, &model.unit) {
+        (Some(t), Some(f)) => (f.metres / t.metres, Some(t.clone())),
+        (Some(t), None) => {
+            return Err(Error::Model {
+                file: model.file.clone(),
+                reason: format!(
+                    "the file declares no length unit, so its lengths cannot be converted to {}",
+                    t.name
+                ),
+            });
+        }
+        (None, u) => (1.0, u.clone()),
+    };
+    if scale != 1.0 {
+        model.scale(scale);
+    }
+    let report = ImportReport {
+        file: model.file.clone(),
+        format: model.format,
+        file_units: model.unit.as_ref().map(|u| u.name.clone()),
+        units: units.map(|u| u.name),
+        scale,
+        reference_length: 0.0,
+        tolerance: 0.0,
+        sew_tolerance: 0.0,
+        entities: Vec::new(),
+        max_error: 0.0,
+        faces: Vec::new(),
+        shells: Vec::new(),
+        curve_components: 0,
+        sewn_edges: 0,
+        max_sew_gap: 0.0,
+        free_edges: Vec::new(),
+        non_manifold_edges: Vec::new(),
+        orientation_conflicts: 0,
+        warnings: model.warnings.clone(),
+    };
+    stage::run(&model, opts, report)
 }

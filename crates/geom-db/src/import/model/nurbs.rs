@@ -1,0 +1,289 @@
+//! Rational B-spline curves and surfaces of the neutral model (homogeneous control points),
+//! evaluated with the bases of [`bspline`](crate::bspline) (Piegl & Tiller A4.1–A4.4: the
+//! point is A/w, the first derivative (A′ − w′ C)/w).
+
+use super::frame::Affine;
+use crate::bspline::KnotVector;
+use crate::prelude::{Point3, Vector3};
+
+/// Relative spread of weights under which a B-spline is polynomial.
+pub(crate) const EQUAL_WEIGHTS: f64 = 1e-12;
+
+/// A (possibly rational) B-spline curve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NurbsCurve {
+    /// Knots and degree.
+    pub knots: KnotVector,
+    /// Homogeneous control points (w x, w y, w z, w).
+    pub ctrl: Vec<[f64; 4]>,
+    /// True when the weights differ (beyond `EQUAL_WEIGHTS`).
+    pub rational: bool,
+}
+
+/// A (possibly rational) tensor B-spline surface; control point (i, j) (i along u) at
+/// `ctrl[i + n_u j]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NurbsSurface {
+    /// Knots and degree in u.
+    pub knots_u: KnotVector,
+    /// Knots and degree in v.
+    pub knots_v: KnotVector,
+    /// Homogeneous control points, u fastest.
+    pub ctrl: Vec<[f64; 4]>,
+    /// True when the weights differ.
+    pub rational: bool,
+    /// The file says the surface is closed in u (a seam).
+    pub closed_u: bool,
+    /// The file says the surface is closed in v.
+    pub closed_v: bool,
+}
+
+/// The distance under which a B-spline surface counts as meeting itself across a
+/// direction: 1e-9 of its control net's bounding-box diagonal.
+pub(crate) fn closure_tol(points: &[Point3]) -> f64 {
+    let (mut lo, mut hi) = (points[0], points[0]);
+    for p in points {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    1e-9 * (hi - lo).norm()
+}
+
+/// Whether weights differ by more than [`EQUAL_WEIGHTS`]; `Err` when one is not positive
+/// and finite.
+pub(crate) fn weights_rational(w: impl Iterator<Item = f64>) -> Result<bool, String> {
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for x in w {
+        if !(x > 0.0) || !x.is_finite() {
+            return Err(format!("weight {x} is not positive"));
+        }
+        lo = lo.min(x);
+        hi = hi.max(x);
+    }
+    Ok(hi - lo > EQUAL_WEIGHTS * hi)
+}
+
+fn homogeneous(p: Point3, w: f64) -> [f64; 4] {
+    [p.x * w, p.y * w, p.z * w, w]
+}
+
+fn transform_h(m: &Affine, h: &[f64; 4]) -> [f64; 4] {
+    let w = h[3];
+    homogeneous(m.point(&Point3::new(h[0] / w, h[1] / w, h[2] / w)), w)
+}
+
+impl NurbsCurve {
+    /// A curve from its knots, points and weights (one per point).
+    pub fn new(knots: KnotVector, points: &[Point3], weights: &[f64]) -> Result<Self, String> {
+        if points.len() != knots.n_basis() || weights.len() != points.len() {
+            return Err(format!(
+                "{} control points and {} weights for {} basis functions",
+                points.len(),
+                weights.len(),
+                knots.n_basis()
+            ));
+        }
+        let rational = weights_rational(weights.iter().copied())?;
+        Ok(NurbsCurve {
+            ctrl: points
+                .iter()
+                .zip(weights)
+                .map(|(p, &w)| homogeneous(*p, w))
+                .collect(),
+            knots,
+            rational,
+        })
+    }
+
+    /// The knot domain.
+    pub fn domain(&self) -> (f64, f64) {
+        self.knots.domain()
+    }
+
+    /// C(t).
+    pub fn point(&self, t: f64) -> Point3 {
+        let h = self.knots.curve_point(&self.ctrl, t);
+        Point3::new(h[0] / h[3], h[1] / h[3], h[2] / h[3])
+    }
+
+    /// C(t) and C′(t).
+    pub fn derivs(&self, t: f64) -> (Point3, Vector3) {
+        let d = self.knots.curve_ders(&self.ctrl, t, 1);
+        let (a, w) = (Vector3::new(d[0][0], d[0][1], d[0][2]), d[0][3]);
+        let (a1, w1) = (Vector3::new(d[1][0], d[1][1], d[1][2]), d[1][3]);
+        let c = a / w;
+        (Point3::from(c), (a1 - c * w1) / w)
+    }
+
+    /// The Euclidean control points (for the polynomial case).
+    pub fn points(&self) -> Vec<Point3> {
+        self.ctrl
+            .iter()
+            .map(|h| Point3::new(h[0] / h[3], h[1] / h[3], h[2] / h[3]))
+            .collect()
+    }
+
+    /// Maps the control points (exact: affine maps commute with the rational basis).
+    pub fn transform(&mut self, m: &Affine) {
+        for h in &mut self.ctrl {
+            *h = transform_h(m, h);
+        }
+    }
+}
+
+impl NurbsSurface {
+    /// A surface from its knots, points and weights (`[i + n_u j]`).
+    pub fn new(
+        knots_u: KnotVector,
+        knots_v: KnotVector,
+        points: &[Point3],
+        weights: &[f64],
+    ) -> Result<Self, String> {
+        let n = knots_u.n_basis() * knots_v.n_basis();
+        if points.len() != n || weights.len() != n {
+            return Err(format!(
+                "{} control points and {} weights for {} × {} basis functions",
+                points.len(),
+                weights.len(),
+                knots_u.n_basis(),
+                knots_v.n_basis()
+            ));
+        }
+        let rational = weights_rational(weights.iter().copied())?;
+        Ok(NurbsSurface {
+            ctrl: points
+                .iter()
+                .zip(weights)
+                .map(|(p, &w)| homogeneous(*p, w))
+                .collect(),
+            knots_u,
+            knots_v,
+            rational,
+            closed_u: false,
+            closed_v: false,
+        })
+    }
+
+    /// (u, v) brought into the domain across a closed direction (unchanged otherwise).
+    pub fn wrap(&self, u: f64, v: f64) -> (f64, f64) {
+        let w = |x: f64, (a, b): (f64, f64), closed: bool| {
+            if closed && !(a..=b).contains(&x) {
+                a + (x - a).rem_euclid(b - a)
+            } else {
+                x
+            }
+        };
+        let (du, dv) = self.domain();
+        (w(u, du, self.closed_u), w(v, dv, self.closed_v))
+    }
+
+    /// Whether the surface meets itself across u = u0 / u1 (`u = true`) or v, sampled at 9
+    /// points within `tol`.
+    pub fn meets_itself(&self, u: bool, tol: f64) -> bool {
+        let ((u0, u1), (v0, v1)) = self.domain();
+        (0..=8).all(|k| {
+            let f = k as f64 / 8.0;
+            let (a, b) = if u {
+                let v = v0 + f * (v1 - v0);
+                (self.point(u0, v), self.point(u1, v))
+            } else {
+                let u = u0 + f * (u1 - u0);
+                (self.point(u, v0), self.point(u, v1))
+            };
+            (a - b).norm() <= tol
+        })
+    }
+
+    /// The knot domain ((u0, u1), (v0, v1)).
+    pub fn domain(&self) -> ((f64, f64), (f64, f64)) {
+        (self.knots_u.domain(), self.knots_v.domain())
+    }
+
+    /// S(u, v), S_u, S_v.
+    pub fn derivs(&self, u: f64, v: f64) -> (Point3, Vector3, Vector3) {
+        let (pu, pv) = (self.knots_u.degree(), self.knots_v.degree());
+        let (su, nu) = self.knots_u.basis_ders(u, 1);
+        let (sv, nv) = self.knots_v.basis_ders(v, 1);
+        let n_u = self.knots_u.n_basis();
+        let (mut a, mut au, mut av) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+        for b in 0..=pv {
+            let j = sv - pv + b;
+            for c in 0..=pu {
+                let i = su - pu + c;
+                let h = &self.ctrl[i + n_u * j];
+                let (n00, n10, n01) = (
+                    nu[0][c] * nv[0][b],
+                    nu[1][c] * nv[0][b],
+                    nu[0][c] * nv[1][b],
+                );
+                for k in 0..4 {
+                    a[k] += n00 * h[k];
+                    au[k] += n10 * h[k];
+                    av[k] += n01 * h[k];
+                }
+            }
+        }
+        let w = a[3];
+        let s = Vector3::new(a[0], a[1], a[2]) / w;
+        let du = (Vector3::new(au[0], au[1], au[2]) - s * au[3]) / w;
+        let dv = (Vector3::new(av[0], av[1], av[2]) - s * av[3]) / w;
+        (Point3::from(s), du, dv)
+    }
+
+    /// S(u, v).
+    pub fn point(&self, u: f64, v: f64) -> Point3 {
+        let (pu, pv) = (self.knots_u.degree(), self.knots_v.degree());
+        let mut nu = vec![0.0; pu + 1];
+        let mut nv = vec![0.0; pv + 1];
+        let su = self.knots_u.basis_into(u, &mut nu);
+        let sv = self.knots_v.basis_into(v, &mut nv);
+        let n_u = self.knots_u.n_basis();
+        let mut h = [0.0; 4];
+        for (b, &wv) in nv.iter().enumerate() {
+            let j = sv - pv + b;
+            for (c, &wu) in nu.iter().enumerate() {
+                let i = su - pu + c;
+                let p = &self.ctrl[i + n_u * j];
+                for k in 0..4 {
+                    h[k] += wu * wv * p[k];
+                }
+            }
+        }
+        Point3::new(h[0] / h[3], h[1] / h[3], h[2] / h[3])
+    }
+
+    /// Maps the control points.
+    pub fn transform(&mut self, m: &Affine) {
+        for h in &mut self.ctrl {
+            *h = transform_h(m, h);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The rational quadratic quarter circle: C(t) on the unit circle, C′ by differences.
+    #[test]
+    fn quarter_circle_and_its_derivative() {
+        let kv = KnotVector::new(2, vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0]).unwrap();
+        let pts = [
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(1.0, 1.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+        ];
+        let c = NurbsCurve::new(kv, &pts, &[1.0, 0.5f64.sqrt(), 1.0]).unwrap();
+        assert!(c.rational);
+        for k in 0..=10 {
+            let t = k as f64 / 10.0;
+            let (p, d) = c.derivs(t);
+            assert!((p.coords.norm() - 1.0).abs() < 1e-15);
+            let h = 1e-6;
+            let fd = (c.point((t + h).min(1.0)) - c.point((t - h).max(0.0)))
+                / ((t + h).min(1.0) - (t - h).max(0.0));
+            assert!((d - fd).norm() < 1e-6 * d.norm(), "{t}");
+        }
+        assert!(NurbsCurve::new(KnotVector::bezier(2), &pts, &[1.0, 0.0, 1.0]).is_err());
+    }
+}

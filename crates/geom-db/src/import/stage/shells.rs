@@ -1,0 +1,100 @@
+//! Stage 8, shells: each connected set of faces, its enclosed volume V = ⅓ ∮ x·n dA (with
+//! Green's theorem in each face's parameter plane), whether it is closed, and the global
+//! choice of normals: the largest shell (by bounding-box diagonal) is flipped to V < 0
+//! (normals into the fluid it encloses, e.g. a far field) and the others to V > 0 (bodies:
+//! normals away from them); [`ImportOptions::flip`](super::super::ImportOptions::flip)
+//! reverses all.
+
+use super::super::model::CadModel;
+use super::corners::Corners;
+use super::edges::Edges;
+use super::faces::Faces;
+use super::orientation::{Oriented, flip_face};
+use super::sewing::Sewn;
+use super::{green_area, green_flux, loop_polygon};
+use crate::prelude::Point3;
+
+/// What stage 8 produces.
+pub(crate) struct Shells {
+    /// Enclosed volume per shell, with the final normals.
+    pub volumes: Vec<f64>,
+    /// Bounding-box diagonal of each shell's corners.
+    pub sizes: Vec<f64>,
+    /// Every edge of the shell is used twice.
+    pub closed: Vec<bool>,
+    /// Per face: its area.
+    pub areas: Vec<f64>,
+}
+
+/// Runs stage 8, flipping shells in `oriented`.
+pub(crate) fn run(
+    model: &CadModel,
+    faces: &Faces,
+    edges: &Edges,
+    corners: &Corners,
+    sewn: &Sewn,
+    oriented: &mut Oriented,
+    flip_all: bool,
+) -> Shells {
+    let n = oriented.n_shells;
+    let mut volumes = vec![0.0; n];
+    let mut areas = vec![0.0; oriented.loops.len()];
+    let inf = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    let mut boxes = vec![(inf, -inf); n];
+    for (fi, loops) in oriented.loops.iter().enumerate() {
+        let sh = oriented.shell_of[fi];
+        for lp in loops {
+            let poly = loop_polygon(model, faces, fi, lp, sewn, edges);
+            volumes[sh] += green_flux(faces, fi, &poly) / 3.0;
+            areas[fi] += green_area(faces, fi, &poly) * oriented.inward[fi].sign();
+            for &(s, _) in lp {
+                let (a, b) = sewn.edges[s].corners;
+                for p in [corners.points[a.index()], corners.points[b.index()]] {
+                    boxes[sh].0 = boxes[sh].0.inf(&p);
+                    boxes[sh].1 = boxes[sh].1.sup(&p);
+                }
+            }
+        }
+    }
+    let sizes: Vec<f64> = boxes
+        .iter()
+        .map(|(a, b)| {
+            let d = (b - a).norm();
+            if d.is_finite() { d } else { 0.0 }
+        })
+        .collect();
+    let largest = (0..n)
+        .max_by(|&a, &b| sizes[a].total_cmp(&sizes[b]).then(b.cmp(&a)))
+        .unwrap_or(0);
+    let mut shell_flip = vec![false; n];
+    for sh in 0..n {
+        let want_negative = sh == largest;
+        shell_flip[sh] = (volumes[sh] > 0.0) == want_negative;
+        if flip_all {
+            shell_flip[sh] = !shell_flip[sh];
+        }
+        if shell_flip[sh] {
+            volumes[sh] = -volumes[sh];
+        }
+    }
+    for fi in 0..oriented.loops.len() {
+        if shell_flip[oriented.shell_of[fi]] {
+            let (inward, loops) = (&mut oriented.inward[fi], &mut oriented.loops[fi]);
+            flip_face(inward, loops);
+        }
+    }
+    let mut closed = vec![true; n];
+    for s in &sewn.edges {
+        if s.uses.len() != 2 {
+            for u in &s.uses {
+                closed[oriented.shell_of[u.face]] = false;
+            }
+        }
+    }
+    Shells {
+        volumes,
+        sizes,
+        closed,
+        areas,
+    }
+}
