@@ -37,6 +37,14 @@ pub(crate) struct Context<'a> {
     pub exact: Option<&'a [[f64; 3]]>,
 }
 
+impl<'a> Context<'a> {
+    /// The supports, when some unknown slides on one.
+    pub fn on_supports(&self) -> Option<&'a Supports<'a>> {
+        self.sup
+            .filter(|_| self.sys.sup_unk.iter().any(|&u| u != u32::MAX))
+    }
+}
+
 /// The state an attempt carries from one increment to the next.
 pub(crate) struct Attempt {
     /// Node coordinates.
@@ -73,7 +81,7 @@ pub(crate) struct StepOut {
 impl Increment<'_> {
     /// The prescribed nodes' positions at the fraction `s` of the motion (the other nodes at
     /// `cur`) and the largest displacement from `cur`.
-    fn targets(&self, ctx: &Context, cur: &[[f64; 3]]) -> (Vec<[f64; 3]>, f64) {
+    pub fn targets(&self, ctx: &Context, cur: &[[f64; 3]]) -> (Vec<[f64; 3]>, f64) {
         let (x0, cls, s) = (&ctx.mesh.coords, ctx.cls, self.s);
         let mut target: Vec<[f64; 3]> = cur.to_vec();
         let mut max_disp = 0.0f64;
@@ -139,7 +147,6 @@ impl Increment<'_> {
                 &owned
             }
         };
-        let a = op.matrix();
         if let Pre::Amg(m) = &op.pre {
             out.amg = Some(m.info());
         }
@@ -153,42 +160,8 @@ impl Increment<'_> {
 
         // Eq. 21 right-hand side.
         let t = Instant::now();
-        let cur: &[[f64; 3]] = &st.cur;
-        let disp = |j: usize| {
-            let (t, c) = (target[j], cur[j]);
-            [t[0] - c[0], t[1] - c[1], t[2] - c[2]]
-        };
-        // −Σ_j K_ij (R_ij − I)(x_j − x_i) over every neighbour j of node i: the unknown ones
-        // from A's row k (a_kl = −K_ij), then the prescribed ones.
-        let mut b = rhs(sys, &op.couplings, disp, |k, i| {
-            let mut s = [0.0; 3];
-            if !rf.any {
-                return s;
-            }
-            let (cols, vals) = a.row(k);
-            for (&c, &akl) in cols.iter().zip(vals) {
-                let akl = f64::from(akl);
-                let r = rf.minus_identity(i, sys.node_of[c as usize] as usize, cur);
-                for q in 0..3 {
-                    s[q] += akl * r[q];
-                }
-            }
-            let (nodes, kij) = op.couplings.row(k);
-            for (&j, &kij) in nodes.iter().zip(kij) {
-                let r = rf.minus_identity(i, j as usize, cur);
-                for q in 0..3 {
-                    s[q] -= kij * r[q];
-                }
-            }
-            s
-        });
+        let b = spring_rhs(mesh.dim, sys, op, &rf, &st.cur, &target);
         out.qv = rf.solution;
-        if mesh.dim == 2 {
-            // Plane grids stay in their plane.
-            for v in b.iter_mut() {
-                v[2] = 0.0;
-            }
-        }
         times.assemble += t.elapsed().as_secs_f64();
 
         let t = Instant::now();
@@ -199,9 +172,7 @@ impl Increment<'_> {
         };
         // The starting guess: the outer iteration of the sliding measures its updates from it.
         let dx0 = dx.clone();
-        let on_supports = ctx
-            .sup
-            .filter(|_| sys.sup_unk.iter().any(|&u| u != u32::MAX));
+        let on_supports = ctx.on_supports();
         let cons = if on_supports.is_some() {
             constraints(cls, sys, ctx.sup, &st.params)?
         } else {
@@ -227,27 +198,91 @@ impl Increment<'_> {
             out.iterations += so.solver_iterations;
         }
         times.solve += t.elapsed().as_secs_f64();
-        let cur = &mut st.cur;
-        for (k, &i) in sys.node_of.iter().enumerate() {
-            let c = &mut cur[i as usize];
-            for q in 0..3 {
-                c[q] += dx[k][q];
-            }
-        }
         out.dx = dx;
-        if let Some(sp) = on_supports {
-            // Exactly on the support.
-            for (k, sn) in cls.supports.iter().enumerate() {
-                if sys.sup_unk[k] != u32::MAX {
-                    cur[sn.node as usize] = point(sp.db, sn.kind, st.params[k]);
-                }
-            }
-        }
-        for i in 0..cur.len() {
-            if matches!(cls.roles[i], NodeRole::Rigid(_) | NodeRole::Displaced(_)) {
-                cur[i] = target[i];
-            }
-        }
+        place(ctx, on_supports, &mut st.cur, &out.dx, &st.params, &target);
         Ok(out)
+    }
+}
+
+/// The right-hand side of Eq. 21 for the unknowns of the state `cur` moving the prescribed
+/// nodes to `target`, with the R field `rf`:
+/// b_i = Σ_{j prescribed} K_ij (t_j − x_j) − Σ_j K_ij (R_ij − I)(x_j − x_i) (z components
+/// zero in a plane grid).
+pub(crate) fn spring_rhs(
+    dim: u8,
+    sys: &System,
+    op: &Operator,
+    rf: &RField,
+    cur: &[[f64; 3]],
+    target: &[[f64; 3]],
+) -> Vec<V3> {
+    let a = op.matrix();
+    let disp = |j: usize| {
+        let (t, c) = (target[j], cur[j]);
+        [t[0] - c[0], t[1] - c[1], t[2] - c[2]]
+    };
+    // −Σ_j K_ij (R_ij − I)(x_j − x_i) over every neighbour j of node i: the unknown ones
+    // from A's row k (a_kl = −K_ij), then the prescribed ones.
+    let mut b = rhs(sys, &op.couplings, disp, |k, i| {
+        let mut s = [0.0; 3];
+        if !rf.any {
+            return s;
+        }
+        let (cols, vals) = a.row(k);
+        for (&c, &akl) in cols.iter().zip(vals) {
+            let akl = f64::from(akl);
+            let r = rf.minus_identity(i, sys.node_of[c as usize] as usize, cur);
+            for q in 0..3 {
+                s[q] += akl * r[q];
+            }
+        }
+        let (nodes, kij) = op.couplings.row(k);
+        for (&j, &kij) in nodes.iter().zip(kij) {
+            let r = rf.minus_identity(i, j as usize, cur);
+            for q in 0..3 {
+                s[q] -= kij * r[q];
+            }
+        }
+        s
+    });
+    if dim == 2 {
+        // Plane grids stay in their plane.
+        for v in b.iter_mut() {
+            v[2] = 0.0;
+        }
+    }
+    b
+}
+
+/// Moves the grid `cur` by the solved increment: the unknowns by `dx`, the nodes sliding on
+/// supports (when `on_supports`) exactly onto their supports at `params`, the prescribed
+/// nodes to `target`.
+pub(crate) fn place(
+    ctx: &Context,
+    on_supports: Option<&Supports>,
+    cur: &mut [[f64; 3]],
+    dx: &[V3],
+    params: &[[f64; 2]],
+    target: &[[f64; 3]],
+) {
+    let (cls, sys) = (ctx.cls, ctx.sys);
+    for (k, &i) in sys.node_of.iter().enumerate() {
+        let c = &mut cur[i as usize];
+        for q in 0..3 {
+            c[q] += dx[k][q];
+        }
+    }
+    if let Some(sp) = on_supports {
+        // Exactly on the support.
+        for (k, sn) in cls.supports.iter().enumerate() {
+            if sys.sup_unk[k] != u32::MAX {
+                cur[sn.node as usize] = point(sp.db, sn.kind, params[k]);
+            }
+        }
+    }
+    for i in 0..cur.len() {
+        if matches!(cls.roles[i], NodeRole::Rigid(_) | NodeRole::Displaced(_)) {
+            cur[i] = target[i];
+        }
     }
 }

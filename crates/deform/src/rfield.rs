@@ -25,9 +25,9 @@ use crate::rotation::rotation_from_frame;
 /// nothing rotates), and what the Eq. 26 solve did.
 pub(crate) struct RField {
     /// Vector part u of each node's quaternion.
-    qv: Vec<V3>,
+    pub qv: Vec<V3>,
     /// Scalar part w of each node's quaternion.
-    qw: Vec<f64>,
+    pub qw: Vec<f64>,
     /// False when every R_i is the identity (no R term in the right-hand side).
     pub any: bool,
     /// The Eq. 26 solution per unknown, before the clamp to |u| ≤ 1 (the warm start of a
@@ -35,6 +35,99 @@ pub(crate) struct RField {
     pub solution: Vec<V3>,
     /// Iterations of the Eq. 26 solve.
     pub iterations: usize,
+}
+
+/// The skin elements' rotations of one increment (Eq. 25): per element of
+/// [`Classified::skin`], its rotation from the frame at `cur` (S̄, kept in `op`) to the frame
+/// at `target` as a unit quaternion [x, y, z, w] (w ≥ 0; about z only in 2D) and its size
+/// (the weight of its rotation at its nodes); `None` for a degenerate element.
+pub(crate) fn element_quaternions(
+    mesh: &Mesh,
+    cls: &Classified,
+    op: &Operator,
+    cur: &[[f64; 3]],
+    target: &[[f64; 3]],
+) -> Vec<Option<([f64; 4], f64)>> {
+    // Per element (in parallel; the sums of `node_quaternions` run in element order).
+    cls.skin
+        .par_iter()
+        .zip(&op.skin)
+        .with_min_len(256)
+        .map(|(e, f)| {
+            let (inv0, size) = (*f)?;
+            let k = e.len().min(3);
+            let (p0, p1) = (skin_points(e, cur), skin_points(e, target));
+            let r = if p0 == p1 {
+                Matrix3::identity()
+            } else {
+                rotation_from_frame(&inv0, &p1[..k])?
+            };
+            let mut q = quat(&r);
+            if mesh.dim == 2 {
+                // Plane grids rotate about z only (drop the round-off of the SVD).
+                let l = (q[2] * q[2] + q[3] * q[3]).sqrt();
+                q = [0.0, 0.0, q[2] / l, q[3] / l];
+            }
+            Some((q, size))
+        })
+        .collect()
+}
+
+/// The skin nodes' rotations: the size-weighted sum of their elements' quaternions
+/// ([`element_quaternions`]), normalised. Returns the vector and scalar parts per node
+/// (identity where no element touches the node or the sum is the identity's direction),
+/// the length of each node's sum (0 where the node keeps the identity), and whether any
+/// node rotates.
+pub(crate) fn node_quaternions(
+    cls: &Classified,
+    n: usize,
+    rots: &[Option<([f64; 4], f64)>],
+) -> (Vec<V3>, Vec<f64>, Vec<f64>, bool) {
+    let mut qv: Vec<V3> = vec![[0.0; 3]; n];
+    let mut qw: Vec<f64> = vec![1.0; n];
+    let mut len = vec![0.0; n];
+    let mut any_rot = false;
+    let mut acc: Vec<[f64; 4]> = vec![[0.0; 4]; n];
+    let mut touched = vec![false; n];
+    for (e, rot) in cls.skin.iter().zip(rots) {
+        let Some((q, w)) = *rot else {
+            continue;
+        };
+        for &v in e {
+            let a = &mut acc[v as usize];
+            for k in 0..4 {
+                a[k] += w * q[k];
+            }
+            touched[v as usize] = true;
+        }
+    }
+    for i in 0..n {
+        if touched[i] {
+            let a = acc[i];
+            let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + a[3] * a[3]).sqrt();
+            if l > 0.0 && (a[0], a[1], a[2]) != (0.0, 0.0, 0.0) {
+                qv[i] = [a[0] / l, a[1] / l, a[2] / l];
+                qw[i] = a[3] / l;
+                len[i] = l;
+                any_rot = true;
+            }
+        }
+    }
+    (qv, qw, len, any_rot)
+}
+
+/// The rotation of an unknown from its Eq. 26 solution `v` (the quaternion's vector part):
+/// (v, √(1 − |v|²)), or (v / |v|, 0) when |v| > 1 (solver round-off: the discrete maximum
+/// principle keeps |v| ≤ 1).
+#[inline]
+pub(crate) fn unknown_quaternion(v: V3) -> (V3, f64) {
+    let s2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    if s2 <= 1.0 {
+        (v, (1.0 - s2).sqrt())
+    } else {
+        let l = s2.sqrt();
+        ([v[0] / l, v[1] / l, v[2] / l], 0.0)
+    }
 }
 
 impl RField {
@@ -52,93 +145,84 @@ impl RField {
         warm: Option<&[V3]>,
         opts: &DeformOptions,
     ) -> Self {
+        Self::build(mesh, cls, sys, op, cur, target, opts, |bv, nu| {
+            // u = 0 (R = I) as the start, or the previous solution when warm.
+            let mut xv = match warm {
+                Some(w) if w.len() == nu => w.to_vec(),
+                _ => vec![[0.0; 3]; nu],
+            };
+            let rv = op.solve(bv, &mut xv, &Constraints::default(), opts, 1.0);
+            (xv, rv.iterations)
+        })
+    }
+
+    /// The R field of an increment already solved: the skin as in [`RField::new`], the
+    /// unknowns from the Eq. 26 solution `solution` of that increment (bit for bit the field
+    /// [`RField::new`] gave, when `solution` is its [`RField::solution`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_solution(
+        mesh: &Mesh,
+        cls: &Classified,
+        sys: &System,
+        op: &Operator,
+        cur: &[[f64; 3]],
+        target: &[[f64; 3]],
+        solution: &[V3],
+        opts: &DeformOptions,
+    ) -> Self {
+        Self::build(mesh, cls, sys, op, cur, target, opts, |_, nu| {
+            let x = if solution.len() == nu {
+                solution.to_vec()
+            } else {
+                vec![[0.0; 3]; nu]
+            };
+            (x, 0)
+        })
+    }
+
+    /// The skin rotations, then the unknowns' from `solve(Eq. 26 right-hand side, unknowns)`
+    /// (its solution and iterations).
+    #[allow(clippy::too_many_arguments)]
+    fn build(
+        mesh: &Mesh,
+        cls: &Classified,
+        sys: &System,
+        op: &Operator,
+        cur: &[[f64; 3]],
+        target: &[[f64; 3]],
+        opts: &DeformOptions,
+        solve: impl FnOnce(&[V3], usize) -> (Vec<V3>, usize),
+    ) -> Self {
         let n = cur.len();
-        let mut qv: Vec<V3> = vec![[0.0; 3]; n];
-        let mut qw: Vec<f64> = vec![1.0; n];
-        let mut any_rot = false;
+        if !(opts.adapt_rotation && !cls.skin.is_empty()) {
+            return Self {
+                qv: vec![[0.0; 3]; n],
+                qw: vec![1.0; n],
+                any: false,
+                solution: Vec::new(),
+                iterations: 0,
+            };
+        }
+        let rots = element_quaternions(mesh, cls, op, cur, target);
+        let (mut qv, mut qw, _, any_rot) = node_quaternions(cls, n, &rots);
+        drop(rots);
         let mut solution = Vec::new();
         let mut iterations = 0;
-        if opts.adapt_rotation && !cls.skin.is_empty() {
-            let mut acc: Vec<[f64; 4]> = vec![[0.0; 4]; n];
-            let mut touched = vec![false; n];
-            // Per element (in parallel; the sums below run in element order): its rotation as
-            // a quaternion and its size as the weight.
-            let rots: Vec<Option<([f64; 4], f64)>> = cls
-                .skin
-                .par_iter()
-                .zip(&op.skin)
-                .with_min_len(256)
-                .map(|(e, f)| {
-                    let (inv0, size) = (*f)?;
-                    let k = e.len().min(3);
-                    let (p0, p1) = (skin_points(e, cur), skin_points(e, target));
-                    let r = if p0 == p1 {
-                        Matrix3::identity()
-                    } else {
-                        rotation_from_frame(&inv0, &p1[..k])?
-                    };
-                    let mut q = quat(&r);
-                    if mesh.dim == 2 {
-                        // Plane grids rotate about z only (drop the round-off of the SVD).
-                        let l = (q[2] * q[2] + q[3] * q[3]).sqrt();
-                        q = [0.0, 0.0, q[2] / l, q[3] / l];
-                    }
-                    Some((q, size))
-                })
-                .collect();
-            for (e, rot) in cls.skin.iter().zip(&rots) {
-                let Some((q, w)) = *rot else {
-                    continue;
-                };
-                for &v in e {
-                    let a = &mut acc[v as usize];
-                    for k in 0..4 {
-                        a[k] += w * q[k];
-                    }
-                    touched[v as usize] = true;
-                }
+        if any_rot {
+            // Eq. 26 for the quaternions' vector part u (one three-component solve); the
+            // scalar part follows from it, w = √(1 − |u|²) ≥ 0 (the discrete maximum
+            // principle keeps |u| ≤ 1 up to the solver tolerance: clamped), so no second
+            // solve is needed (see the module doc).
+            let bv = rhs(sys, &op.couplings, |j| qv[j], |_, _| [0.0; 3]);
+            let (xv, it) = solve(&bv, sys.node_of.len());
+            drop(bv);
+            iterations = it;
+            for (k, &i) in sys.node_of.iter().enumerate() {
+                let (u, w) = unknown_quaternion(xv[k]);
+                qv[i as usize] = u;
+                qw[i as usize] = w;
             }
-            for i in 0..n {
-                if touched[i] {
-                    let a = acc[i];
-                    let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + a[3] * a[3]).sqrt();
-                    if l > 0.0 && (a[0], a[1], a[2]) != (0.0, 0.0, 0.0) {
-                        qv[i] = [a[0] / l, a[1] / l, a[2] / l];
-                        qw[i] = a[3] / l;
-                        any_rot = true;
-                    }
-                }
-            }
-            if any_rot {
-                // Eq. 26 for the quaternions' vector part u (one three-component solve); the
-                // scalar part follows from it, w = √(1 − |u|²) ≥ 0 (the discrete maximum
-                // principle keeps |u| ≤ 1 up to the solver tolerance: clamped), so no second
-                // solve is needed (see the module doc).
-                drop((acc, touched));
-                let bv = rhs(sys, &op.couplings, |j| qv[j], |_, _| [0.0; 3]);
-                let nu = sys.node_of.len();
-                // u = 0 (R = I) as the start, or the previous solution when warm.
-                let mut xv = match warm {
-                    Some(w) if w.len() == nu => w.to_vec(),
-                    _ => vec![[0.0; 3]; nu],
-                };
-                let rv = op.solve(&bv, &mut xv, &Constraints::default(), opts, 1.0);
-                drop(bv);
-                iterations = rv.iterations;
-                for (k, &i) in sys.node_of.iter().enumerate() {
-                    let v = xv[k];
-                    let s2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-                    let (u, w) = if s2 <= 1.0 {
-                        (v, (1.0 - s2).sqrt())
-                    } else {
-                        let l = s2.sqrt();
-                        ([v[0] / l, v[1] / l, v[2] / l], 0.0)
-                    };
-                    qv[i as usize] = u;
-                    qw[i as usize] = w;
-                }
-                solution = xv;
-            }
+            solution = xv;
         }
         Self {
             qv,
@@ -173,7 +257,7 @@ impl RField {
 /// given: (2w (u×d) + 2 u×(u×d)) / l² — the unit quaternion's formula without the square
 /// root of its normalisation.
 #[inline]
-fn rot_minus_id(u: [f64; 3], w: f64, l2: f64, d: [f64; 3]) -> V3 {
+pub(crate) fn rot_minus_id(u: [f64; 3], w: f64, l2: f64, d: [f64; 3]) -> V3 {
     let c = |a: [f64; 3], b: [f64; 3]| {
         [
             a[1] * b[2] - a[2] * b[1],
@@ -212,7 +296,7 @@ pub(crate) fn element_size(p: &[[f64; 3]]) -> f64 {
 }
 
 /// Unit quaternion [x, y, z, w] of a rotation matrix, with w ≥ 0.
-fn quat(r: &Matrix3<f64>) -> [f64; 4] {
+pub(crate) fn quat(r: &Matrix3<f64>) -> [f64; 4] {
     if *r == Matrix3::identity() {
         return [0.0, 0.0, 0.0, 1.0];
     }

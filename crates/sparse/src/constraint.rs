@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 
-use crate::sym::{Entry, SymMatrix};
+use crate::operator::LinearOperator;
 use crate::vec3::{CHUNK, V3, norm, ordered_sum};
 
 /// A linear constraint on one unknown's 3-vector.
@@ -116,7 +116,7 @@ impl<'b> ProjectedRhs<'b> {
 
     /// r ← P b − A x; returns |r|² only without constraints (otherwise the caller projects r
     /// and sums it again).
-    pub(crate) fn residual<T: Entry>(&self, a: &SymMatrix<T>, x: &[V3], r: &mut [V3]) -> f64 {
+    pub(crate) fn residual<A: LinearOperator + ?Sized>(&self, a: &A, x: &[V3], r: &mut [V3]) -> f64 {
         let rr = a.residual(self.b, x, r);
         let mut t = 0;
         while t < self.items.len() {

@@ -12,6 +12,8 @@
 //!   f32 ([`Entry`]); one scalar matrix shared by the three components of a displacement.
 //! - [`Csr`], [`csr::build_rows`]: general CSR matrices built row-parallel; [`Graph`].
 //! - [`vec3`]: dot products, norms and updates whose sums do not depend on the thread count.
+//! - [`LinearOperator`]: what the conjugate gradients multiply by ([`SymMatrix`], or
+//!   [`WithBlocks`]: a [`SymMatrix`] plus symmetric 3×3 blocks on some unknowns).
 //! - [`pcg()`] with a [`Preconditioner`] ([`Jacobi`], or any other, e.g. deform's multigrid)
 //!   and [`Constraints`]; [`stationary::point_iteration`].
 //! - [`order`]: orderings and permutations. **Convention: `perm[old] = new`.**
@@ -38,6 +40,7 @@ pub mod error;
 pub mod generate;
 pub mod graph;
 pub mod madd;
+pub mod operator;
 pub mod order;
 pub mod pcg;
 pub mod precond;
@@ -52,6 +55,7 @@ pub use constraint::{Constraint, Constraints};
 pub use csr::Csr;
 pub use error::{Error, Result};
 pub use graph::Graph;
+pub use operator::{Block3, LinearOperator, WithBlocks};
 pub use pcg::{SolveOptions, SolveReport, pcg};
 pub use precond::{Jacobi, Preconditioner, Weights};
 pub use stationary::point_iteration;

@@ -9,8 +9,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::constraint::{Constraints, ProjectedRhs};
+use crate::operator::LinearOperator;
 use crate::precond::{Preconditioner, Weights};
-use crate::sym::{Entry, SymMatrix};
 use crate::vec3::{CHUNK, V3, axpy, axpy_xpby, chunked_sum, dot, norm, ordered_sum};
 
 /// Stopping rule and limits of an iterative solve.
@@ -48,9 +48,10 @@ pub struct SolveReport {
 
 /// Solves A x = b (three components) by preconditioned CG from the initial guess in `x`,
 /// in the subspace of `cons` (b, x and the search directions are projected; the preconditioned
-/// residual too). Deterministic for any thread count.
-pub fn pcg<P: Preconditioner + ?Sized, T: Entry>(
-    a: &SymMatrix<T>,
+/// residual too). `a` is any symmetric [`LinearOperator`] (a [`crate::SymMatrix`], or one with
+/// 3×3 blocks added, [`crate::WithBlocks`]). Deterministic for any thread count.
+pub fn pcg<P: Preconditioner + ?Sized, A: LinearOperator + ?Sized>(
+    a: &A,
     b: &[V3],
     x: &mut [V3],
     m: &P,
