@@ -13,6 +13,10 @@
 //! solve and `DEFORM_BENCH_SOLVES_ONLY` the whole deformations; `DEFORM_BENCH_SETUP_REPS=N`
 //! times N multigrid set-ups in a row instead of the solves; `DEFORM_BENCH_TRACE` prints the
 //! seconds of every set-up step of the whole deformations and of every multigrid level.
+//! `DEFORM_BENCH_LINEARISE` runs the linearisation's figures and group instead (module
+//! `linearise`).
+
+mod linearise;
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -617,6 +621,16 @@ fn benches(c: &mut Criterion) {
 }
 
 fn main() {
+    if std::env::var_os("DEFORM_BENCH_LINEARISE").is_some() {
+        // The linearisation's figures and criterion group only (benches/linearise.rs).
+        linearise::figures();
+        if std::env::var("DEFORM_BENCH_FIGURES_ONLY").is_err() {
+            let mut c = Criterion::default().configure_from_args();
+            linearise::benches(&mut c);
+            c.final_summary();
+        }
+        return;
+    }
     figures();
     if std::env::var("DEFORM_BENCH_FIGURES_ONLY").is_err() {
         let mut c = Criterion::default().configure_from_args();

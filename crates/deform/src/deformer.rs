@@ -51,6 +51,10 @@ pub(crate) struct SolverState {
     pub qv: Vec<V3>,
     /// Parameters of the nodes sliding on supports (classification order).
     pub params: Vec<[f64; 2]>,
+    /// The prescribed displacements of the call (set-up order), and the positions when the
+    /// call gave positions: what [`Deformer::linearise`] re-reads.
+    pub values: Vec<[f64; 3]>,
+    pub exact: Option<Vec<[f64; 3]>>,
 }
 
 /// Deforms the volume grid for the boundary conditions `bc` (Eqs. 14–26 and 34), with the
@@ -176,11 +180,11 @@ pub struct Deformer<'s> {
     /// The grid in solver numbering (renumbered with `opts.renumber`).
     pub(crate) mesh: Mesh,
     /// Input node → solver node (None without renumbering).
-    perm: Option<Vec<u32>>,
+    pub(crate) perm: Option<Vec<u32>>,
     /// Solver node → input node (empty without renumbering).
-    inv: Vec<u32>,
+    pub(crate) inv: Vec<u32>,
     /// The boundary conditions in solver numbering.
-    bc: BoundaryConditions,
+    pub(crate) bc: BoundaryConditions,
     pub(crate) sup: Option<Supports<'s>>,
     pub(crate) opts: DeformOptions,
     pub(crate) cls: Classified,
@@ -471,6 +475,8 @@ impl<'s> Deformer<'s> {
         };
         let mut d =
             guard::run(self, &bc, warm, exact, progress).map_err(|e| e.renumbered(&self.inv))?;
+        d.state.values = bc.displacements.iter().map(|e| e.1).collect();
+        d.state.exact = exact.map(<[[f64; 3]]>::to_vec);
         if let Some(perm) = &self.perm {
             d.coords = perm.iter().map(|&p| d.coords[p as usize]).collect();
             for (v, _) in d.supports.iter_mut() {

@@ -28,6 +28,8 @@
 //! - `increment`: one increment of the motion; `guard`: the quality guard and its
 //!   increments; [`deformer`]: [`Deformer`] (the reusable set-up), [`Deformed`] and the free
 //!   functions [`deform`], [`deform_on_supports`].
+//! - [`linearise`]: [`Linearisation`] ([`Deformer::linearise`]), the forward and reverse
+//!   products of the deformation (issue 22).
 //! - [`report`]: [`DeformReport`]; [`solve`]: the multigrid preconditioner on `sparse`'s
 //!   matrices and conjugate gradients; [`generate`]: test and benchmark grids.
 
@@ -38,6 +40,7 @@ pub mod error;
 pub mod generate;
 mod guard;
 mod increment;
+pub mod linearise;
 mod operator;
 pub mod options;
 pub mod report;
@@ -56,6 +59,7 @@ pub use deformer::{
 };
 pub use error::{Error, Result};
 pub use guard::cell_quality;
+pub use linearise::{Linearisation, Product};
 pub use options::{DeformOptions, SolverKind};
 pub use report::{DeformReport, PhaseTimes, StepTime};
 pub use stiffness::Stiffness;

@@ -8,7 +8,8 @@ use mesh::{Adjacency, Mesh};
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 use sparse::{
-    Constraints, Csr, Jacobi, SolveOptions, SolveReport, SymMatrix, V3, pcg, point_iteration,
+    Block3, Constraints, Csr, Jacobi, SolveOptions, SolveReport, SymMatrix, V3, WithBlocks, pcg,
+    point_iteration,
 };
 
 use crate::assembly::{System, assemble, couplings};
@@ -148,6 +149,33 @@ impl Operator {
             Pre::Amg(m) => pcg(a, b, x, m, cons, &so),
             Pre::Jacobi(m) => pcg(a, b, x, m, cons, &so),
             Pre::None => point_iteration(a, b, x, cons, 1.0, opts.step_rel_tol * step_len, &so),
+        }
+    }
+}
+
+impl Operator {
+    /// Solves the linearised system P (A + B) P x = P b (B: the symmetric 3×3 `blocks`, P:
+    /// the projection on `cons`) by conjugate gradients preconditioned as the deformation's
+    /// solves (the multigrid, or Jacobi; Jacobi also when the deformation used the point
+    /// iteration), to the relative residual `rel_tol`.
+    pub fn solve_linear(
+        &self,
+        b: &[V3],
+        x: &mut [V3],
+        cons: &Constraints,
+        blocks: &[(u32, Block3)],
+        rel_tol: f64,
+        max_iters: usize,
+    ) -> SolveReport {
+        let op = WithBlocks {
+            a: self.matrix(),
+            blocks,
+        };
+        let so = SolveOptions { rel_tol, max_iters };
+        match &self.pre {
+            Pre::Amg(m) => pcg(&op, b, x, m, cons, &so),
+            Pre::Jacobi(m) => pcg(&op, b, x, m, cons, &so),
+            Pre::None => pcg(&op, b, x, &Jacobi::new(self.matrix()), cons, &so),
         }
     }
 }

@@ -194,7 +194,7 @@ impl RField {
         solve: impl FnOnce(&[V3], usize) -> (Vec<V3>, usize),
     ) -> Self {
         let n = cur.len();
-        if !(opts.adapt_rotation && !cls.skin.is_empty()) {
+        if !opts.adapt_rotation || cls.skin.is_empty() {
             return Self {
                 qv: vec![[0.0; 3]; n],
                 qw: vec![1.0; n],

@@ -116,7 +116,12 @@ impl<'b> ProjectedRhs<'b> {
 
     /// r ← P b − A x; returns |r|² only without constraints (otherwise the caller projects r
     /// and sums it again).
-    pub(crate) fn residual<A: LinearOperator + ?Sized>(&self, a: &A, x: &[V3], r: &mut [V3]) -> f64 {
+    pub(crate) fn residual<A: LinearOperator + ?Sized>(
+        &self,
+        a: &A,
+        x: &[V3],
+        r: &mut [V3],
+    ) -> f64 {
         let rr = a.residual(self.b, x, r);
         let mut t = 0;
         while t < self.items.len() {

@@ -2,6 +2,8 @@
 
 mod cases;
 mod identities;
+mod linearise;
+mod linearise_grids;
 mod props;
 mod reuse;
 mod supports;

@@ -24,7 +24,7 @@ fn bulge(x: f64, z: f64, c: f64) -> f64 {
 /// holds that surface (one bi-quadratic patch, (u, v) = (x / 2, z / 2.2)) and its four
 /// border curves (in the planes x = 0, x = 2, z = 0, z = 2.2); the supports classify the
 /// bottom face's nodes as Gmsh would (corners, border curves, surface).
-fn bulged_box(c: f64) -> (Mesh, GeomDb, Vec<(u32, Support)>) {
+pub(crate) fn bulged_box(c: f64) -> (Mesh, GeomDb, Vec<(u32, Support)>) {
     let mut m =
         deform::generate::box_with_block([8, 7, 9], [0.0; 3], [LX, LY, LZ], [3, 0, 3], [5, 3, 6]);
     let flat = m.coords.clone();

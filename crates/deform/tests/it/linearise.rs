@@ -1,0 +1,340 @@
+//! [`deform::Linearisation`]: the forward product against central differences of the whole
+//! deformation (with and without R, sliding on planes and on curved supports, several
+//! increments), and the reverse product against the forward one (dot-product test).
+
+use std::sync::OnceLock;
+
+use deform::{BoundaryConditions, DeformOptions, Deformer, MarkerRole, Stiffness, Supports};
+use mesh::Mesh;
+use proptest::prelude::*;
+
+/// The wing's nodes, sorted.
+fn wing_nodes(m: &Mesh) -> Vec<u32> {
+    let mut nodes: Vec<u32> = m
+        .marker("wing")
+        .unwrap()
+        .elements
+        .node_set()
+        .into_iter()
+        .collect();
+    nodes.sort_unstable();
+    nodes
+}
+
+/// A smooth displacement field of the wing: twist about y and heave, amplitude `amp`
+/// (`lx`, `ly`, `lz`: the box size).
+fn field(m: &Mesh, nodes: &[u32], amp: f64, size: [f64; 3]) -> Vec<[f64; 3]> {
+    nodes
+        .iter()
+        .map(|&v| {
+            let p = m.coords[v as usize];
+            let s = p[1] / size[1];
+            let (x, z) = (p[0] / size[0] - 0.5, p[2] / size[2] - 0.5);
+            [
+                amp * 0.08 * s * z,
+                amp * 0.03 * s * (1.0 + x),
+                amp * (0.1 * s * s - 0.08 * s * x),
+            ]
+        })
+        .collect()
+}
+
+/// A second, different field: the perturbation direction.
+fn direction(m: &Mesh, nodes: &[u32], size: [f64; 3]) -> Vec<[f64; 3]> {
+    nodes
+        .iter()
+        .map(|&v| {
+            let p = m.coords[v as usize];
+            let (x, y, z) = (p[0] / size[0], p[1] / size[1], p[2] / size[2]);
+            [
+                0.05 * (3.0 * y + x).sin(),
+                0.04 * (2.0 * z - x).cos() * y,
+                0.06 * (x * z + y),
+            ]
+        })
+        .collect()
+}
+
+fn box_grid() -> Mesh {
+    deform::generate::box_with_block([9, 6, 8], [0.0; 3], [2.0, 1.2, 1.6], [3, 0, 3], [6, 3, 5])
+}
+
+const BOX: [f64; 3] = [2.0, 1.2, 1.6];
+
+fn tight(opts: DeformOptions) -> DeformOptions {
+    DeformOptions {
+        rel_tol: 1e-13,
+        slide_rel_tol: 1e-13,
+        ..opts
+    }
+}
+
+fn add(a: &[[f64; 3]], h: f64, b: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| [p[0] + h * q[0], p[1] + h * q[1], p[2] + h * q[2]])
+        .collect()
+}
+
+fn norm(a: &[[f64; 3]]) -> f64 {
+    a.iter().flatten().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+/// The forward product at `w` along `dw` (inputs: the nodes `nodes`) against central
+/// differences with step `h`: returns (|J dw − FD| / |FD|, |FD| / |dw| over the nodes that
+/// are not inputs, increments).
+pub(crate) fn forward_vs_differences(
+    d: &Deformer,
+    nodes: &[u32],
+    w: &[[f64; 3]],
+    dw: &[[f64; 3]],
+    h: f64,
+) -> (f64, f64, usize) {
+    let base = d.deform(w, None).unwrap();
+    let lin = d.linearise(&base).unwrap().with_rel_tol(1e-13);
+    let jv = lin.jvp(dw).unwrap();
+    let (xp, xm) = (
+        d.deform(&add(w, h, dw), None).unwrap(),
+        d.deform(&add(w, -h, dw), None).unwrap(),
+    );
+    assert_eq!(xp.report.increments, base.report.increments);
+    assert_eq!(xm.report.increments, base.report.increments);
+    let fd: Vec<[f64; 3]> = xp
+        .coords
+        .iter()
+        .zip(&xm.coords)
+        .map(|(p, q)| {
+            [
+                (p[0] - q[0]) / (2.0 * h),
+                (p[1] - q[1]) / (2.0 * h),
+                (p[2] - q[2]) / (2.0 * h),
+            ]
+        })
+        .collect();
+    let err: Vec<[f64; 3]> = add(&jv.values, -1.0, &fd);
+    let mut inner = fd.clone();
+    for &v in nodes {
+        inner[v as usize] = [0.0; 3];
+    }
+    (
+        norm(&err) / norm(&fd),
+        norm(&inner) / norm(dw),
+        base.report.increments,
+    )
+}
+
+/// The product on the nodes that are not inputs must be far from zero: the comparison is
+/// then not won by a product that only copies dw onto the prescribed nodes.
+fn check(what: &str, r: (f64, f64, usize), increments: usize) {
+    let (err, size, inc) = r;
+    eprintln!(
+        "{what}: relative error {err:.2e}, |FD off the inputs| / |dw| = {size:.3}, {inc} increment(s)"
+    );
+    assert_eq!(inc, increments, "{what}: increments");
+    assert!(
+        size > 0.5,
+        "{what}: the product is too small to test ({size})"
+    );
+    assert!(err < 1e-6, "{what}: relative error {err:e}");
+}
+
+#[test]
+fn forward_product_matches_central_differences_with_and_without_r() {
+    let m = box_grid();
+    let nodes = wing_nodes(&m);
+    for rot in [true, false] {
+        let opts = tight(DeformOptions {
+            adapt_rotation: rot,
+            ..Default::default()
+        });
+        let bc = BoundaryConditions {
+            markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
+            displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
+        };
+        let d = Deformer::new(&m, &bc, &opts).unwrap();
+        let w = field(&m, &nodes, 1.0, BOX);
+        let dw = direction(&m, &nodes, BOX);
+        check(
+            &format!("R {rot}"),
+            forward_vs_differences(&d, &nodes, &w, &dw, 1e-4),
+            1,
+        );
+    }
+}
+
+#[test]
+fn forward_product_matches_central_differences_at_zero_motion() {
+    // The baseline itself (nothing is solved there): R's derivative is still there.
+    let m = box_grid();
+    let nodes = wing_nodes(&m);
+    let bc = BoundaryConditions {
+        markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
+        displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
+    };
+    let d = Deformer::new(&m, &bc, &tight(DeformOptions::default())).unwrap();
+    let w = vec![[0.0; 3]; nodes.len()];
+    let dw = direction(&m, &nodes, BOX);
+    check(
+        "zero motion",
+        forward_vs_differences(&d, &nodes, &w, &dw, 1e-4),
+        1,
+    );
+}
+
+#[test]
+fn forward_product_matches_central_differences_over_increments() {
+    let m = box_grid();
+    let nodes = wing_nodes(&m);
+    for stiffness in [Stiffness::InverseLengthSquared, Stiffness::InverseLength] {
+        // Any loss of minimum quality splits the motion: 4 increments.
+        let opts = tight(DeformOptions {
+            stiffness,
+            min_quality_ratio: 1.0,
+            max_increments: 4,
+            ..Default::default()
+        });
+        let bc = BoundaryConditions {
+            markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
+            displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
+        };
+        let d = Deformer::new(&m, &bc, &opts).unwrap();
+        let w = field(&m, &nodes, 2.0, BOX);
+        let dw = direction(&m, &nodes, BOX);
+        check(
+            &format!("4 increments, {stiffness}"),
+            // The step of the study (docs/crates/deform.md, "Linearisation"): the later
+            // increments' f32 stiffnesses add noise ∝ 1/h.
+            forward_vs_differences(&d, &nodes, &w, &dw, 1e-2),
+            4,
+        );
+    }
+}
+
+/// The bulged box of `supports.rs` with its bottom sliding on the curved support and the
+/// wing displaced.
+struct OnSupports {
+    m: Mesh,
+    db: geom_db::GeomDb,
+    sup: Vec<(u32, deform::Support)>,
+    nodes: Vec<u32>,
+}
+
+fn on_supports() -> OnSupports {
+    let (m, db, sup) = crate::supports::bulged_box(1.0);
+    let nodes = wing_nodes(&m);
+    OnSupports { m, db, sup, nodes }
+}
+
+impl OnSupports {
+    fn deformer(&self, opts: &DeformOptions) -> Deformer<'_> {
+        let bc = BoundaryConditions {
+            markers: vec![("y_m".into(), MarkerRole::SlideOnSupport)],
+            displacements: self.nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
+        };
+        let sup = Supports {
+            db: &self.db,
+            nodes: self.sup.clone(),
+        };
+        Deformer::on_supports(&self.m, &bc, &sup, opts).unwrap()
+    }
+}
+
+const BULGED: [f64; 3] = [2.0, 1.5, 2.2];
+
+#[test]
+fn forward_product_matches_central_differences_on_curved_supports() {
+    let c = on_supports();
+    for (inc, ratio) in [(1, 0.2), (2, 1.0)] {
+        let opts = tight(DeformOptions {
+            min_quality_ratio: ratio,
+            max_increments: inc,
+            ..Default::default()
+        });
+        let d = c.deformer(&opts);
+        let w = field(&c.m, &c.nodes, 1.5, BULGED);
+        let dw = direction(&c.m, &c.nodes, BULGED);
+        check(
+            &format!("supports, {inc} increment(s)"),
+            forward_vs_differences(&d, &c.nodes, &w, &dw, if inc > 1 { 1e-2 } else { 1e-4 }),
+            inc,
+        );
+    }
+}
+
+/// The reverse product of the most general case (R, curved supports, two increments).
+fn general() -> &'static (OnSupports, Vec<[f64; 3]>) {
+    static CASE: OnceLock<(OnSupports, Vec<[f64; 3]>)> = OnceLock::new();
+    CASE.get_or_init(|| {
+        let c = on_supports();
+        let w = field(&c.m, &c.nodes, 1.5, BULGED);
+        (c, w)
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+
+    #[test]
+    fn reverse_product_is_the_transpose_of_the_forward_one(seed in 0u64..1_000_000) {
+        let (c, w) = general();
+        let opts = DeformOptions {
+            min_quality_ratio: 1.0,
+            max_increments: 2,
+            ..Default::default()
+        };
+        let d = c.deformer(&opts);
+        let base = d.deform(w, None).unwrap();
+        prop_assert_eq!(base.report.increments, 2);
+        let lin = d.linearise(&base).unwrap().with_rel_tol(1e-14);
+        // Pseudo-random vectors from the seed.
+        let mut s = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let mut next = move || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let dw: Vec<[f64; 3]> = (0..lin.n_inputs()).map(|_| [next(), next(), next()]).collect();
+        let yb: Vec<[f64; 3]> = (0..lin.n_nodes()).map(|_| [next(), next(), next()]).collect();
+        let jv = lin.jvp(&dw).unwrap().values;
+        let jt = lin.vjp(&yb).unwrap().values;
+        let dotp = |a: &[[f64; 3]], b: &[[f64; 3]]| -> f64 {
+            a.iter().zip(b).map(|(p, q)| p[0] * q[0] + p[1] * q[1] + p[2] * q[2]).sum()
+        };
+        let (l, r) = (dotp(&jv, &yb), dotp(&dw, &jt));
+        let scale = norm(&jv) * norm(&yb);
+        prop_assert!((l - r).abs() <= 1e-10 * scale, "{} vs {} (scale {})", l, r, scale);
+    }
+}
+
+/// The step-size study of docs/crates/deform.md ("Linearisation"): the error of central
+/// differences against the forward product for steps h from 3e-2 to 1e-6, one and four
+/// increments. One increment: truncation (∝ h²) down to ~1e-11 at h ≈ 3e-4, then the
+/// solver's residual (∝ 1/h). Four increments: ∝ 1/h from h ≈ 1e-2 down: the stiffnesses of
+/// the later increments are rounded to f32 (6e-8 relative) at a state that moves with h.
+/// Checks that the best step is below the tests' 1e-6.
+#[test]
+#[ignore = "step-size study (a few seconds); run by cargo xtask regress"]
+fn step_size_study() {
+    let m = box_grid();
+    let nodes = wing_nodes(&m);
+    for inc in [1usize, 4] {
+        let opts = tight(DeformOptions {
+            min_quality_ratio: if inc > 1 { 1.0 } else { 0.2 },
+            max_increments: inc,
+            ..Default::default()
+        });
+        let bc = BoundaryConditions {
+            markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
+            displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
+        };
+        let d = Deformer::new(&m, &bc, &opts).unwrap();
+        let w = field(&m, &nodes, 2.0, BOX);
+        let dw = direction(&m, &nodes, BOX);
+        let mut best = f64::INFINITY;
+        for h in [3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 1e-6] {
+            let r = forward_vs_differences(&d, &nodes, &w, &dw, h);
+            eprintln!("{inc} increment(s), h = {h:e}: relative error {:.3e}", r.0);
+            best = best.min(r.0);
+        }
+        assert!(best < 1e-6, "{inc} increment(s): best {best:e}");
+    }
+}
