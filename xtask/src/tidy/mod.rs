@@ -131,16 +131,7 @@ pub const ENV_EXCEPTIONS: &[(&str, &str)] = &[];
 pub const MAX_LINES: usize = 900;
 
 /// Library files over [`MAX_LINES`] lines whose split is pending, with the reason.
-pub const LONG_FILE_EXCEPTIONS: &[(&str, &str)] = &[
-    (
-        "crates/mesh/src/msh.rs",
-        "MSH 4.1 reader and writer; split pending",
-    ),
-    (
-        "crates/mesh/src/su2.rs",
-        "SU2 reader and writer; split pending",
-    ),
-];
+pub const LONG_FILE_EXCEPTIONS: &[(&str, &str)] = &[];
 
 /// The commit from which commit subjects are checked (main when the rule was made).
 pub const COMMITS_SINCE: &str = "e5cf37f37b5671af23084d85422db8815a4ea43f";
