@@ -5,9 +5,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use clap::{Args, ValueEnum};
-use deform::{BoundaryConditions, DeformOptions, MarkerRole, RigidMotion, SolverKind, Stiffness};
+use clap::Args;
+use deform::{RigidMotion, SolverKind, Stiffness};
 use serde::Serialize;
+
+use crate::NameParser;
 
 /// Deform a volume mesh from prescribed boundary motion: rigid motion of markers (Eq. 34) or
 /// per-node displacements, with fixed and sliding markers (spring analogy with adaptation
@@ -61,11 +63,16 @@ pub struct DeformArgs {
     pub fixed: Vec<String>,
     /// Linear solver: `pcg` (conjugate gradients with multigrid), `jacobi` (the paper's
     /// point iteration, Eq. 22), `pcg-jacobi` (conjugate gradients, Jacobi preconditioner).
-    #[arg(long, value_enum, default_value_t = SolverArg::Pcg)]
-    pub solver: SolverArg,
-    /// Spring stiffness K_ij.
-    #[arg(long, value_enum, default_value_t = StiffnessArg::InverseLength2)]
-    pub stiffness: StiffnessArg,
+    #[arg(long, default_value_t = SolverKind::PcgMultigrid,
+          value_parser = NameParser::<SolverKind>::new(SolverKind::ALL.map(SolverKind::name)))]
+    pub solver: SolverKind,
+    /// Spring stiffness K_ij: `inverse-length` (1/l), `inverse-length2` (1/l²), `volume`
+    /// (1/l² × mean cell volume / local cell volume), `wall-distance` (1/l² × (1 + (ℓ/d)²),
+    /// d the distance to the moving boundary, ℓ = 0.2 × its size: a stiff layer around moving
+    /// bodies).
+    #[arg(long, default_value_t = Stiffness::InverseLengthSquared,
+          value_parser = NameParser::<Stiffness>::new(Stiffness::ALL.map(Stiffness::name)))]
+    pub stiffness: Stiffness,
     /// Disable the adaptation matrices R (plain spring analogy).
     #[arg(long)]
     pub no_rotation: bool,
@@ -78,31 +85,6 @@ pub struct DeformArgs {
     /// Write the grid even if cells are inverted after the incremental retries.
     #[arg(long)]
     pub allow_inverted: bool,
-}
-
-/// `--solver` values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum SolverArg {
-    /// Conjugate gradients with the multigrid preconditioner.
-    Pcg,
-    /// The paper's point iteration (Eq. 22).
-    Jacobi,
-    /// Conjugate gradients with the Jacobi preconditioner.
-    PcgJacobi,
-}
-
-/// `--stiffness` values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum StiffnessArg {
-    /// K = 1 / l.
-    InverseLength,
-    /// K = 1 / l².
-    InverseLength2,
-    /// K = (1 / l²)(mean cell volume / local cell volume).
-    Volume,
-    /// K = (1 / l²)(1 + (ℓ / d)²), d the distance to the moving boundary, ℓ = 0.2 × its
-    /// size: a stiff layer around moving bodies.
-    WallDistance,
 }
 
 fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
@@ -226,10 +208,6 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         axis_dir: args.axis_dir,
         translation: args.translate,
     };
-    let mut markers: Vec<(String, MarkerRole)> = Vec::new();
-    for r in &args.rigid {
-        markers.push((r.clone(), MarkerRole::Rigid(motion)));
-    }
     let geometry = match &args.geometry {
         Some(p) => {
             let text = std::fs::read_to_string(p).with_context(|| format!("{}", p.display()))?;
@@ -240,86 +218,37 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let supports = match &geometry {
-        Some(db) => Some(
-            deform::Supports::from_classes(&m, db)
-                .with_context(|| format!("{}", args.mesh.display()))?,
-        ),
-        None => None,
-    };
-    for s in &args.slide {
-        let classified = |sp: &deform::Supports| {
-            let on: std::collections::HashSet<u32> = sp.nodes.iter().map(|e| e.0).collect();
-            m.marker(s)
-                .is_some_and(|mk| mk.elements.node_set().iter().all(|v| on.contains(v)))
-        };
-        let role = match &supports {
-            Some(sp) if classified(sp) => MarkerRole::SlideOnSupport,
-            _ => MarkerRole::SlidePlane,
-        };
-        markers.push((s.clone(), role));
-    }
-    for f in &args.fixed {
-        markers.push((f.clone(), MarkerRole::Fixed));
-    }
     let displacements = match &args.displacements {
         Some(p) => read_displacements(p, m.n_nodes())?,
         None => Vec::new(),
     };
-    let bc = BoundaryConditions {
-        markers,
+    let request = deform::Request {
+        rigid: args.rigid.clone(),
+        motion,
         displacements,
-    };
-    let opts = DeformOptions {
-        solver: match args.solver {
-            SolverArg::Pcg => SolverKind::PcgMultigrid,
-            SolverArg::Jacobi => SolverKind::PointIteration,
-            SolverArg::PcgJacobi => SolverKind::PcgJacobi,
-        },
-        stiffness: match args.stiffness {
-            StiffnessArg::InverseLength => Stiffness::InverseLength,
-            StiffnessArg::InverseLength2 => Stiffness::InverseLengthSquared,
-            StiffnessArg::Volume => Stiffness::Volume,
-            StiffnessArg::WallDistance => Stiffness::WallDistance,
-        },
+        slide: args.slide.clone(),
+        fixed: args.fixed.clone(),
+        solver: args.solver,
+        stiffness: args.stiffness,
         adapt_rotation: !args.no_rotation,
         rel_tol: args.tolerance,
-        max_iters: if args.solver == SolverArg::Jacobi {
-            200_000
-        } else {
-            20_000
-        },
         allow_inverted: args.allow_inverted,
-        ..Default::default()
     };
     let mut progress = |phase: &str, done: usize, total: usize| {
         if let Some(b) = &bar {
             b.set_message(format!("{phase} ({done}/{total} increments)"));
         }
     };
-    let d = match &supports {
-        Some(sp) => deform::deform_on_supports_with_progress(&m, &bc, sp, &opts, &mut progress),
-        None => deform::deform_with_progress(&m, &bc, &opts, &mut progress),
-    }
-    .with_context(|| format!("{}", args.mesh.display()))?;
+    let d = request
+        .run(&m, geometry.as_ref(), &mut progress)
+        .with_context(|| format!("{}", args.mesh.display()))?;
     for note in &d.report.notes {
         eprintln!("note: {note}");
     }
     bar_msg(&bar, "writing");
     let t = Instant::now();
     let mut out = m;
-    out.coords = d.coords;
-    // Nodes that slid on supports carry their new parametric coordinates.
-    if let Some(classes) = out.classes.as_mut() {
-        for &(v, s) in &d.supports {
-            let c = &mut classes[v as usize];
-            match s {
-                deform::Support::Curve { t, .. } => c.param = [t, 0.0],
-                deform::Support::Surface { uv, .. } => c.param = uv,
-                deform::Support::Corner => {}
-            }
-        }
-    }
+    deform::request::apply(&mut out, &d);
     aeroshape::fsio::write_atomic(&args.output, |w| mesh::io::write(&out, format, w))?;
     let write = t.elapsed().as_secs_f64();
     if let Some(b) = &bar {

@@ -75,6 +75,61 @@ fn main() -> ExitCode {
     }
 }
 
+/// A clap value parser for a library enum that has `FromStr` and a name per value (deform's
+/// `SolverKind` and `Stiffness`): clap parses with the library's `FromStr` (so the program
+/// and the case files take the same names, and a bad name gets the library's message), and
+/// `--help` lists the names.
+#[derive(Clone)]
+struct NameParser<T> {
+    names: Vec<&'static str>,
+    parsed: std::marker::PhantomData<fn() -> T>,
+}
+
+impl<T> NameParser<T> {
+    /// A parser whose possible values are `names`.
+    fn new(names: impl IntoIterator<Item = &'static str>) -> Self {
+        Self {
+            names: names.into_iter().collect(),
+            parsed: std::marker::PhantomData,
+        }
+    }
+}
+
+impl<T> clap::builder::TypedValueParser for NameParser<T>
+where
+    T: std::str::FromStr + Clone + Send + Sync + 'static,
+    T::Err: std::fmt::Display,
+{
+    type Value = T;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<T, clap::Error> {
+        let name = arg.map_or_else(|| "value".to_string(), |a| format!("'{a}'"));
+        let s = value.to_string_lossy();
+        s.parse::<T>().map_err(|e| {
+            clap::Error::raw(
+                clap::error::ErrorKind::InvalidValue,
+                format!("invalid value '{s}' for {name}: {e}\n"),
+            )
+            .with_cmd(cmd)
+        })
+    }
+
+    fn possible_values(
+        &self,
+    ) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
+        Some(Box::new(
+            self.names
+                .iter()
+                .map(|&n| clap::builder::PossibleValue::new(n)),
+        ))
+    }
+}
+
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Deform(args) => deform::run(args),

@@ -10,7 +10,7 @@
 use std::collections::HashSet;
 use std::path::PathBuf;
 
-use ::deform::{BoundaryConditions, DeformOptions, MarkerRole, RigidMotion, SolverKind, Stiffness};
+use ::deform::{RigidMotion, SolverKind, Stiffness};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -61,31 +61,14 @@ impl PyDeformation {
     }
 }
 
-fn solver(name: &str) -> PyResult<SolverKind> {
-    Ok(match name {
-        "pcg" => SolverKind::PcgMultigrid,
-        "jacobi" => SolverKind::PointIteration,
-        "pcg-jacobi" => SolverKind::PcgJacobi,
-        _ => {
-            return Err(PyValueError::new_err(format!(
-                "solver {name:?}: use \"pcg\", \"jacobi\" or \"pcg-jacobi\""
-            )));
-        }
-    })
-}
-
-fn stiffness(name: &str) -> PyResult<Stiffness> {
-    Ok(match name {
-        "inverse-length" => Stiffness::InverseLength,
-        "inverse-length2" => Stiffness::InverseLengthSquared,
-        "volume" => Stiffness::Volume,
-        "wall-distance" => Stiffness::WallDistance,
-        _ => {
-            return Err(PyValueError::new_err(format!(
-                "stiffness {name:?}: use \"inverse-length\", \"inverse-length2\", \"volume\" or \"wall-distance\""
-            )));
-        }
-    })
+/// A library name (`solver`, `stiffness`) parsed by the library's `FromStr`, its message
+/// as the `ValueError`.
+fn named<T: std::str::FromStr>(what: &str, name: &str) -> PyResult<T>
+where
+    T::Err: std::fmt::Display,
+{
+    name.parse()
+        .map_err(|e| PyValueError::new_err(format!("{what}: {e}")))
 }
 
 /// The `displacements` argument: `(nodes, d)` or `{node: (dx, dy, dz)}`; checked as the
@@ -211,29 +194,26 @@ pub fn deform_mesh(
             "tolerance: {tolerance} must be a positive number"
         )));
     }
-    let kind = self::solver(solver)?;
     let motion = RigidMotion {
         angle_deg: rotate_deg,
         axis_point: vec3(axis_point, "axis_point")?,
         axis_dir: vec3(axis_dir, "axis_dir")?,
         translation: vec3(translate, "translate")?,
     };
-    let displacements = match &displacements {
-        Some(d) => self::displacements(d, m.n_nodes())?,
-        None => Vec::new(),
-    };
-    let opts = DeformOptions {
-        solver: kind,
-        stiffness: self::stiffness(stiffness)?,
+    let request = ::deform::Request {
+        rigid,
+        motion,
+        displacements: match &displacements {
+            Some(d) => self::displacements(d, m.n_nodes())?,
+            None => Vec::new(),
+        },
+        slide,
+        fixed,
+        solver: named::<SolverKind>("solver", solver)?,
+        stiffness: named::<Stiffness>("stiffness", stiffness)?,
         adapt_rotation: !no_rotation,
         rel_tol: tolerance,
-        max_iters: if kind == SolverKind::PointIteration {
-            200_000
-        } else {
-            20_000
-        },
         allow_inverted,
-        ..Default::default()
     };
     let mut prog = Progress::new(py, "deform", progress)?;
     let result = py.detach(|| -> Result<_, (Kind, String)> {
@@ -248,52 +228,12 @@ pub fn deform_mesh(
             }
             None => None,
         };
-        let supports = match &geometry {
-            Some(db) => Some(
-                ::deform::Supports::from_classes(m, db)
-                    .map_err(|e| (Kind::Deform, errors::one_line(&e)))?,
-            ),
-            None => None,
-        };
-        let mut markers: Vec<(String, MarkerRole)> = rigid
-            .iter()
-            .map(|r| (r.clone(), MarkerRole::Rigid(motion)))
-            .collect();
-        for s in &slide {
-            let classified = |sp: &::deform::Supports| {
-                let on: HashSet<u32> = sp.nodes.iter().map(|e| e.0).collect();
-                m.marker(s)
-                    .is_some_and(|mk| mk.elements.node_set().iter().all(|v| on.contains(v)))
-            };
-            let role = match &supports {
-                Some(sp) if classified(sp) => MarkerRole::SlideOnSupport,
-                _ => MarkerRole::SlidePlane,
-            };
-            markers.push((s.clone(), role));
-        }
-        markers.extend(fixed.iter().map(|f| (f.clone(), MarkerRole::Fixed)));
-        let bc = BoundaryConditions {
-            markers,
-            displacements,
-        };
         let mut report = |phase: &str, done: usize, total: usize| prog.report(phase, done, total);
-        let d = match &supports {
-            Some(sp) => ::deform::deform_on_supports_with_progress(m, &bc, sp, &opts, &mut report),
-            None => ::deform::deform_with_progress(m, &bc, &opts, &mut report),
-        }
-        .map_err(|e| (Kind::Deform, errors::one_line(&e)))?;
+        let d = request
+            .run(m, geometry.as_ref(), &mut report)
+            .map_err(|e| (Kind::Deform, errors::one_line(&e)))?;
         let mut out = m.clone();
-        out.coords = d.coords.clone();
-        if let Some(classes) = out.classes.as_mut() {
-            for &(v, s) in &d.supports {
-                let c = &mut classes[v as usize];
-                match s {
-                    ::deform::Support::Curve { t, .. } => c.param = [t, 0.0],
-                    ::deform::Support::Surface { uv, .. } => c.param = uv,
-                    ::deform::Support::Corner => {}
-                }
-            }
-        }
+        ::deform::request::apply(&mut out, &d);
         Ok((out, d))
     });
     prog.finish()?;

@@ -32,6 +32,8 @@
 //!   products of the deformation (issue 22).
 //! - [`report`]: [`DeformReport`]; [`solve`]: the multigrid preconditioner on `sparse`'s
 //!   matrices and conjugate gradients; [`generate`]: test and benchmark grids.
+//! - [`request`]: [`Request`], a deformation with the front ends' options (the program's
+//!   `aeroshape deform` and Python's `deform()` call it).
 
 mod assembly;
 pub mod bc;
@@ -44,6 +46,7 @@ pub mod linearise;
 mod operator;
 pub mod options;
 pub mod report;
+pub mod request;
 mod rfield;
 pub mod rotation;
 mod sliding;
@@ -62,5 +65,6 @@ pub use guard::cell_quality;
 pub use linearise::{Linearisation, Product};
 pub use options::{DeformOptions, SolverKind};
 pub use report::{DeformReport, PhaseTimes, StepTime};
+pub use request::Request;
 pub use stiffness::Stiffness;
 pub use support::{Support, Supports};

@@ -163,8 +163,24 @@ fn errors_are_one_line_with_exit_1_or_usage_2() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
+    // deform's own message names the choices.
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("unknown solver \"magic\" (expected pcg, jacobi or pcg-jacobi)"),
+        "{err}"
+    );
     let o = bin().args(["deform", "--help"]).output().unwrap();
-    assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("--slide"));
+    let help = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success() && help.contains("--slide"));
+    // --help lists deform's names of the solvers and stiffnesses, and their defaults.
+    assert!(
+        help.contains("[default: pcg] [possible values: pcg, jacobi, pcg-jacobi]"),
+        "{help}"
+    );
+    assert!(
+        help.contains("[default: inverse-length2] [possible values: inverse-length, inverse-length2, volume, wall-distance]"),
+        "{help}"
+    );
 }
 
 /// A cylindrical shell (r ∈ [1, 1.6], θ ∈ [20°, 70°], z ∈ [0.4, 1.6]) around the side of
