@@ -100,29 +100,33 @@ fn info(a: &InfoArgs) -> anyhow::Result<()> {
             },
             "surface_components": comps,
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
     let c = &report.counts;
-    println!("{}: {}", a.geom.display(), db.name);
-    println!(
+    outln!("{}: {}", a.geom.display(), db.name);
+    outln!(
         "  format version {}, units {}",
         db.format_version,
         db.units.as_deref().unwrap_or("(unspecified)")
     );
-    println!("  corners             {}", c.corners);
-    println!(
+    outln!("  corners             {}", c.corners);
+    outln!(
         "  support curves      {} ({} arcs, degree ≤ {})",
-        c.curves, c.arcs, c.max_curve_degree
+        c.curves,
+        c.arcs,
+        c.max_curve_degree
     );
-    println!(
+    outln!(
         "  support surfaces    {} ({} patches, degree ≤ {})",
-        c.surfaces, c.patches, c.max_surface_degree
+        c.surfaces,
+        c.patches,
+        c.max_surface_degree
     );
-    println!("  curve components    {}", c.curve_components);
-    println!("  surface components  {}", c.surface_components);
+    outln!("  curve components    {}", c.curve_components);
+    outln!("  surface components  {}", c.surface_components);
     for (i, sc) in db.surface_components.iter().enumerate() {
-        println!(
+        outln!(
             "    {i}: {:<16} surface {}, {} loop(s), inward {:?}",
             sc.name,
             sc.surface.0,
@@ -130,25 +134,33 @@ fn info(a: &InfoArgs) -> anyhow::Result<()> {
             sc.inward
         );
     }
-    println!("  control nodes       {}", c.control_nodes);
-    print_bbox(&report);
-    println!(
+    outln!("  control nodes       {}", c.control_nodes);
+    print_bbox(&report)?;
+    outln!(
         "  tolerances          Newton {:.3e}, same point {:.3e}",
-        tol.newton.abs, tol.same_point.abs
+        tol.newton.abs,
+        tol.same_point.abs
     );
-    print_topology(&report);
+    print_topology(&report)?;
     Ok(())
 }
 
-fn print_bbox(r: &geom_db::CheckReport) {
+fn print_bbox(r: &geom_db::CheckReport) -> anyhow::Result<()> {
     let [lo, hi] = r.bbox;
-    println!(
+    outln!(
         "  bounding box        [{:.6}, {:.6}, {:.6}] – [{:.6}, {:.6}, {:.6}], diagonal {:.6}",
-        lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], r.reference_length
+        lo[0],
+        lo[1],
+        lo[2],
+        hi[0],
+        hi[1],
+        hi[2],
+        r.reference_length
     );
+    Ok(())
 }
 
-fn print_topology(r: &geom_db::CheckReport) {
+fn print_topology(r: &geom_db::CheckReport) -> anyhow::Result<()> {
     let t = &r.topology;
     let list = |v: &[geom_db::CurveCompId]| {
         v.iter()
@@ -156,22 +168,23 @@ fn print_topology(r: &geom_db::CheckReport) {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    println!(
+    outln!(
         "  topology            {}",
         if t.closed { "closed" } else { "open" }
     );
     if !t.free_edges.is_empty() {
-        println!("    free edges (curve components): {}", list(&t.free_edges));
+        outln!("    free edges (curve components): {}", list(&t.free_edges));
     }
     if !t.non_manifold.is_empty() {
-        println!(
+        outln!(
             "    non-manifold edges (curve components): {}",
             list(&t.non_manifold)
         );
     }
     if !t.unused.is_empty() {
-        println!("    unused curve components: {}", list(&t.unused));
+        outln!("    unused curve components: {}", list(&t.unused));
     }
+    Ok(())
 }
 
 /// Samples per arc for the intersection residuals of `geom check`.
@@ -215,11 +228,11 @@ fn check(a: &CheckArgs) -> anyhow::Result<()> {
         v["file"] = a.geom.display().to_string().into();
         v["ok"] = report.is_ok().into();
         v["intersections"] = serde_json::to_value(&inter)?;
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         let c = &report.counts;
-        println!("{}: {}", a.geom.display(), db.name);
-        println!(
+        outln!("{}: {}", a.geom.display(), db.name);
+        outln!(
             "  {} corners, {} curves ({} arcs), {} surfaces ({} patches), {} curve components, {} surface components, {} control nodes",
             c.corners,
             c.curves,
@@ -230,18 +243,20 @@ fn check(a: &CheckArgs) -> anyhow::Result<()> {
             c.surface_components,
             c.control_nodes
         );
-        print_bbox(&report);
-        print_topology(&report);
+        print_bbox(&report)?;
+        print_topology(&report)?;
         let worst = report.gaps.iter().max_by(|x, y| x.max.total_cmp(&y.max));
         match worst {
-            Some(g) => println!(
+            Some(g) => outln!(
                 "  max gap             {:.3e} ({}), tolerance {:.3e}",
-                g.max, g.what, report.gap_tolerance
+                g.max,
+                g.what,
+                report.gap_tolerance
             ),
-            None => println!("  max gap             none measured"),
+            None => outln!("  max gap             none measured"),
         }
         for r in &inter {
-            println!(
+            outln!(
                 "  intersection        {}: max {:.3e} from {}, {:.3e} from {} ({} samples)",
                 curve_name(r),
                 r.deviation.max_distance[0],
@@ -252,10 +267,10 @@ fn check(a: &CheckArgs) -> anyhow::Result<()> {
             );
         }
         for p in &report.problems {
-            println!("  problem: {p}");
+            outln!("  problem: {p}");
         }
         if report.is_ok() {
-            println!("  valid");
+            outln!("  valid");
         }
     }
     if let Some(first) = report.problems.first() {

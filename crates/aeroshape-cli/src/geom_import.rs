@@ -73,7 +73,7 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
             writeln!(w)
         })?;
     }
-    println!(
+    outln!(
         "{}: {} surface components, {} curve components ({} shared, {} free, {} non-manifold), {} corners",
         a.output.display(),
         db.surface_components.len(),
@@ -83,7 +83,7 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
         report.non_manifold_edges.len(),
         db.corners.len()
     );
-    println!(
+    outln!(
         "  conversion: {} entities, max error {:.3e} (tolerance {:.3e}); max sewing gap {:.3e} (tolerance {:.3e})",
         report.entities.len(),
         report.max_error,
@@ -92,7 +92,7 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
         report.sew_tolerance
     );
     for s in &report.shells {
-        println!(
+        outln!(
             "  shell: {} faces, {}, enclosed volume {:.6e}",
             s.faces,
             if s.closed { "closed" } else { "open" },
@@ -104,9 +104,9 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
         *roles.entry(f.role.as_str()).or_default() += 1;
     }
     let roles: Vec<String> = roles.iter().map(|(r, n)| format!("{n} {r}")).collect();
-    println!("  faces: {}", roles.join(", "));
+    outln!("  faces: {}", roles.join(", "));
     for w in &report.warnings {
-        println!("  warning: {w}");
+        outln!("  warning: {w}");
     }
     Ok(())
 }

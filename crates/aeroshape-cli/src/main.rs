@@ -11,6 +11,16 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+/// `println!` that returns a failed write as an error (`?`, into `anyhow`) instead of
+/// panicking: with `aeroshape … | head -1` the reader closes the pipe and the program stops
+/// quietly ([`main`] exits 0 on a broken pipe). Use it for everything written to stdout.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout(), $($arg)*)?
+    }};
+}
+
 mod deform;
 mod geom;
 mod geom_import;
@@ -68,6 +78,8 @@ fn main() -> ExitCode {
     };
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of stdout went away (`| head`): nothing more to say to anyone.
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", one_line(&e));
             ExitCode::from(1)
@@ -140,6 +152,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Section(cmd) => section::run(cmd),
         Command::Surfgrid(cmd) => surfgrid::run(cmd),
     }
+}
+
+/// True when writing to stdout failed because its reader closed the pipe.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// Flattens an error and its causes into a single line. A cause whose message the line

@@ -136,21 +136,21 @@ fn info(a: &InfoArgs) -> anyhow::Result<()> {
     let m = mesh::io::read_path(&a.mesh)?;
     let i = gather(&a.mesh, &m);
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&i)?);
+        outln!("{}", serde_json::to_string_pretty(&i)?);
         return Ok(());
     }
-    println!("grid: {} ({}-D)", i.file, i.dim);
-    println!("nodes: {}", i.nodes);
-    println!("cells: {} ({})", i.cells, join(&i.cell_kinds));
+    outln!("grid: {} ({}-D)", i.file, i.dim);
+    outln!("nodes: {}", i.nodes);
+    outln!("cells: {} ({})", i.cells, join(&i.cell_kinds));
     for (k, n) in &i.cell_kinds {
-        println!("  {k}: {n}");
+        outln!("  {k}: {n}");
     }
-    println!("markers: {}", i.markers.len());
+    outln!("markers: {}", i.markers.len());
     for mk in &i.markers {
-        println!("  {}: {} ({})", mk.name, mk.elements, join(&mk.kinds));
+        outln!("  {}: {} ({})", mk.name, mk.elements, join(&mk.kinds));
     }
     match i.classified_nodes {
-        Some(c) => println!(
+        Some(c) => outln!(
             "classification: {} on corners, {} on curves, {} on surfaces, {} in volumes{}",
             c[0],
             c[1],
@@ -162,23 +162,29 @@ fn info(a: &InfoArgs) -> anyhow::Result<()> {
                 ""
             }
         ),
-        None => println!("classification: none"),
+        None => outln!("classification: none"),
     }
     let s = &i.quality;
     if s.measured > 0 {
-        println!(
+        outln!(
             "quality (signed mean ratio, {} of {} cells measured): min {:.4}, mean {:.4}, 1st percentile {:.4}, max {:.4}, {} with q <= 0",
-            s.measured, s.count, s.min, s.mean, s.p1, s.max, s.n_nonpositive
+            s.measured,
+            s.count,
+            s.min,
+            s.mean,
+            s.p1,
+            s.max,
+            s.n_nonpositive
         );
     } else {
-        println!("quality: no tetrahedra or triangles to measure");
+        outln!("quality: no tetrahedra or triangles to measure");
     }
     if let Some(a) = i.min_angle_deg {
         let what = if i.dim == 3 { "dihedral" } else { "corner" };
-        println!("min {what} angle: {a:.2} deg");
+        outln!("min {what} angle: {a:.2} deg");
     }
     for w in &i.warnings {
-        println!("warning: {w}");
+        outln!("warning: {w}");
     }
     Ok(())
 }

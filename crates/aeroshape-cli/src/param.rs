@@ -133,7 +133,7 @@ fn list(a: ListArgs) -> anyhow::Result<()> {
             modifiers: Vec<ModRow<'a>>,
             constraints: &'a param::ConstraintMatrix,
         }
-        println!(
+        outln!(
             "{}",
             serde_json::to_string(&Out {
                 variables: vars,
@@ -143,25 +143,38 @@ fn list(a: ListArgs) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    println!("modifiers ({}):", mods.len());
+    outln!("modifiers ({}):", mods.len());
     for m in &mods {
-        println!(
+        outln!(
             "  {:<20} {:<8} moves {} control nodes",
-            m.name, m.level, m.nodes_moved
+            m.name,
+            m.level,
+            m.nodes_moved
         );
     }
-    println!("design variables ({}):", vars.len());
-    println!(
+    outln!("design variables ({}):", vars.len());
+    outln!(
         "  {:<16} {:>12} {:>12} {:>12} {:>8}  {:<14} modifier",
-        "name", "value", "lower", "upper", "scale", "group"
+        "name",
+        "value",
+        "lower",
+        "upper",
+        "scale",
+        "group"
     );
     for v in &vars {
-        println!(
+        outln!(
             "  {:<16} {:>12.6} {:>12.6} {:>12.6} {:>8.3}  {:<14} {}",
-            v.name, v.value, v.lower, v.upper, v.scale, v.group, v.modifier
+            v.name,
+            v.value,
+            v.lower,
+            v.upper,
+            v.scale,
+            v.group,
+            v.modifier
         );
     }
-    println!("constraints ({}):", cm.names.len());
+    outln!("constraints ({}):", cm.names.len());
     for (k, name) in cm.names.iter().enumerate() {
         let terms: Vec<String> = cm.a[k]
             .iter()
@@ -169,7 +182,7 @@ fn list(a: ListArgs) -> anyhow::Result<()> {
             .filter(|(a, _)| **a != 0.0)
             .map(|(a, n)| format!("{a} {n}"))
             .collect();
-        println!("  {name}: {} <= {}", terms.join(" + "), cm.b[k]);
+        outln!("  {name}: {} <= {}", terms.join(" + "), cm.b[k]);
     }
     Ok(())
 }
@@ -228,7 +241,7 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
     }
     let reint = report.curves.iter().filter(|c| c.reintersected).count();
     let corners = report.corners.iter().filter(|c| c.updated).count();
-    println!(
+    outln!(
         "{} design variables, {} control nodes moved (max {:.4e}); {} surfaces re-solved, {} curves re-intersected (max residual {:.3e}), {} corners updated (max residual {:.3e})",
         reg.len(),
         moved,
@@ -239,9 +252,9 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
         corners,
         report.max_corner_residual
     );
-    println!("wrote {}", a.output.display());
+    outln!("wrote {}", a.output.display());
     if let (Some(path), Some(j)) = (&a.jacobian, &jac) {
-        println!(
+        outln!(
             "wrote {} ({} × {}, {} non-zeros)",
             path.display(),
             j.n_rows,

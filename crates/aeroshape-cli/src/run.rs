@@ -159,7 +159,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         serde_json::to_writer_pretty(&mut *w, &rr).map_err(std::io::Error::other)?;
         writeln!(w)
     })?;
-    println!(
+    outln!(
         "param {:.3} s ({} control nodes moved, max {:.3e}); model update {:.3} s (junction residual {:.2e}, {:.2e} relative); surface grid {:.3} s ({} nodes moved); deform {:.3} s ({} iterations, residual {:.1e})",
         r.param.seconds,
         r.param.nodes_moved,
@@ -173,7 +173,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         r.deform.iterations(),
         r.deform.report.as_ref().map_or(0.0, |d| d.residual)
     );
-    println!(
+    outln!(
         "quality min {:.4} → {:.4}, mean {:.4} → {:.4}, 1st percentile {:.4} → {:.4}, inverted {} → {}",
         r.quality_before.min,
         r.quality_after.min,
@@ -185,7 +185,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         r.quality_after.inverted
     );
     for w in &written {
-        println!("wrote {w}");
+        outln!("wrote {w}");
     }
     eprintln!("[run] done in {:.2} s", t0.elapsed().as_secs_f64());
     Ok(())

@@ -115,9 +115,9 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<()> {
         plot_fit(&airfoil.name, &f, png)?;
     }
     if a.json {
-        println!("{}", serde_json::to_string(&fit_json(&f))?);
+        outln!("{}", serde_json::to_string(&fit_json(&f))?);
     } else {
-        print_fit(&shown, &airfoil, &f);
+        print_fit(&shown, &airfoil, &f)?;
     }
     Ok(())
 }
@@ -142,24 +142,24 @@ fn fit_json(f: &SectionFit) -> serde_json::Value {
     })
 }
 
-fn print_fit(shown: &str, airfoil: &Airfoil, f: &SectionFit) {
+fn print_fit(shown: &str, airfoil: &Airfoil, f: &SectionFit) -> anyhow::Result<()> {
     let t = &f.params.thickness;
-    println!(
+    outln!(
         "airfoil: {} ({shown}, {} points)",
         airfoil.name.trim(),
         f.points.len()
     );
     for w in &airfoil.warnings {
-        println!("note: {w}");
+        outln!("note: {w}");
     }
-    println!(
+    outln!(
         "frame: leading edge ({:.6}, {:.6}), chord {:.6}, chord angle {:.4} deg",
         f.frame.le[0],
         f.frame.le[1],
         f.frame.chord,
         f.frame.angle.to_degrees()
     );
-    println!("thickness (Eq. 39, half-thickness, chords / radians):");
+    outln!("thickness (Eq. 39, half-thickness, chords / radians):");
     let named = [
         ("r0", t.r0, "leading-edge radius"),
         ("z1", t.z1, "P1 = (0, z1)"),
@@ -173,23 +173,27 @@ fn print_fit(shown: &str, airfoil: &Airfoil, f: &SectionFit) {
         ("d78", t.d78, "|P8 - P7|"),
     ];
     for (n, v, what) in named {
-        println!("  {n:<7} = {v:>12.6}   {what}");
+        outln!("  {n:<7} = {v:>12.6}   {what}");
     }
     if !t.extra.is_empty() {
-        println!("thickness_extra (x, z):");
+        outln!("thickness_extra (x, z):");
         for e in &t.extra {
-            println!("  ({:.6}, {:.6})", e[0], e[1]);
+            outln!("  ({:.6}, {:.6})", e[0], e[1]);
         }
     }
-    println!("trailing-edge thickness: {:.6}", f.params.te_thickness);
-    println!("camber control points Q_j (x, z):");
+    outln!("trailing-edge thickness: {:.6}", f.params.te_thickness);
+    outln!("camber control points Q_j (x, z):");
     for q in &f.params.camber {
-        println!("  ({:.6}, {:.6})", q[0], q[1]);
+        outln!("  ({:.6}, {:.6})", q[0], q[1]);
     }
-    println!(
+    outln!(
         "fit error (normal distance / chord): max {:.3e}, rms {:.3e} ({} design variables, {} iterations)",
-        f.max_error, f.rms_error, f.n_design_variables, f.iterations
+        f.max_error,
+        f.rms_error,
+        f.n_design_variables,
+        f.iterations
     );
+    Ok(())
 }
 
 fn section_series(sec: &wingmaster::Section) -> Vec<Series> {

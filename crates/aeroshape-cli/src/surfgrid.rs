@@ -114,7 +114,7 @@ fn generate(a: &GenerateArgs) -> anyhow::Result<()> {
     let g =
         surfgrid::generate(&db, &field, &opts).with_context(|| format!("{}", a.geom.display()))?;
     let st = surfgrid::grid_stats(&g, &field);
-    println!(
+    outln!(
         "{} nodes, {} triangles; min angle {:.2} deg, {:.2} % of triangles >= 20 deg, {:.2} % of edges within +-30 % of the size, worst mean ratio {:.4}",
         g.n_nodes(),
         st.triangles,
@@ -136,7 +136,7 @@ fn classify(a: &ClassifyArgs) -> anyhow::Result<()> {
     let m = mesh::io::read_path(&a.grid)?;
     let (g, rep) = surfgrid::classify(&m, &db, &ClassifyOptions { rel_tol: a.rel_tol })
         .with_context(|| format!("{}", a.grid.display()))?;
-    println!(
+    outln!(
         "{} corner, {} curve and {} surface nodes; distance max {:.3e} (node {}), mean {:.3e}",
         rep.corners,
         rep.curve_nodes,

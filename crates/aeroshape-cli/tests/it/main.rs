@@ -5,5 +5,6 @@ mod deform;
 mod geom;
 mod mesh;
 mod param;
+mod pipe;
 mod section;
 mod surfgrid;
