@@ -191,8 +191,9 @@ pub fn wing_planform(
     wing_surfaces: &[SurfaceId],
 ) -> Result<()> {
     let mut p = Plot::new("Wing planform")
-        .labels("y (span)", "x (chord)")
-        .equal_aspect(true);
+        .labels("y (span)", "x (chord, downstream)")
+        .equal_aspect(true)
+        .y_down(true);
     p.push(
         Series::line(
             "before",

@@ -121,6 +121,9 @@ pub struct Plot {
     pub equal_aspect: bool,
     /// Image size in pixels.
     pub size: (u32, u32),
+    /// The y axis grows downwards (a planform with the chord coordinate x down the page,
+    /// leading edge on top).
+    pub y_down: bool,
 }
 
 /// The colours of series without their own, by series index.
@@ -145,6 +148,7 @@ impl Plot {
             series: Vec::new(),
             equal_aspect: false,
             size: (1200, 700),
+            y_down: false,
         }
     }
 
@@ -158,6 +162,12 @@ impl Plot {
     /// Same scale on both axes.
     pub fn equal_aspect(mut self, on: bool) -> Self {
         self.equal_aspect = on;
+        self
+    }
+
+    /// The y axis grows downwards.
+    pub fn y_down(mut self, on: bool) -> Self {
+        self.y_down = on;
         self
     }
 
@@ -176,6 +186,7 @@ impl Plot {
         let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
         for s in &self.series {
             for &(x, y) in &s.points {
+                let y = self.drawn_y(y);
                 if x.is_finite() && y.is_finite() {
                     x0 = x0.min(x);
                     x1 = x1.max(x);
@@ -192,6 +203,12 @@ impl Plot {
             (a - 0.04 * d, b + 0.04 * d)
         };
         (pad(x0, x1), pad(y0, y1))
+    }
+
+    /// The drawn coordinate of a y value: −y when the axis grows downwards (the tick labels
+    /// then show y again).
+    fn drawn_y(&self, y: f64) -> f64 {
+        if self.y_down { -y } else { y }
     }
 
     /// Draws the plot to a PNG file, atomically (temporary file in the same folder, renamed
@@ -228,7 +245,8 @@ impl Plot {
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         let (x_span, y_span) = (x1 - x0, y1 - y0);
         let x_tick = move |v: &f64| tick_label(*v, x_span);
-        let y_tick = move |v: &f64| tick_label(*v, y_span);
+        let y_sign = if self.y_down { -1.0 } else { 1.0 };
+        let y_tick = move |v: &f64| tick_label(y_sign * *v, y_span);
         chart
             .configure_mesh()
             .x_desc(&self.x_label)
@@ -247,7 +265,7 @@ impl Plot {
             let pts: Vec<(f64, f64)> = s
                 .points
                 .iter()
-                .copied()
+                .map(|&(x, y)| (x, self.drawn_y(y)))
                 .filter(|(x, y)| x.is_finite() && y.is_finite())
                 .collect();
             let size = s.size;
@@ -373,6 +391,18 @@ mod tests {
         assert_eq!(tick_label(-0.00008, 2.2e-4), "-0.00008");
         assert_eq!(tick_label(2.5, 7.0), "2.5");
         assert_eq!(tick_label(3.0, 7.0), "3");
+    }
+
+    #[test]
+    fn a_downward_y_axis_draws_minus_y() {
+        let mut p = Plot::new("t");
+        p.push(Series::line("a", vec![(0.0, 1.0), (1.0, 3.0)]));
+        let (_, (y0, y1)) = p.data_range();
+        assert!(y0 < 1.0 && y1 > 3.0);
+        let p = p.y_down(true);
+        let (_, (y0, y1)) = p.data_range();
+        assert!(y0 < -3.0 && y1 > -1.0 && y1 < 0.0, "{y0} {y1}");
+        assert_eq!(p.drawn_y(3.0), -3.0);
     }
 
     #[test]
