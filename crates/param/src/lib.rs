@@ -103,14 +103,7 @@ impl Parametrisation {
 
     /// The parametrisation as pretty RON.
     pub fn to_ron_string(&self) -> String {
-        let cfg = ron::ser::PrettyConfig::new()
-            .struct_names(false)
-            .indentor("  ".to_string())
-            .extensions(
-                ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES
-                    | ron::extensions::Extensions::IMPLICIT_SOME,
-            );
-        ron::ser::to_string_pretty(self, cfg).unwrap_or_else(|e| format!("// {e}"))
+        ron_to_string(self)
     }
 }
 
@@ -121,6 +114,20 @@ pub fn ron_options() -> ron::Options {
     ron::Options::default()
         .with_default_extension(ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES)
         .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}
+
+/// Writes `value` as pretty RON in the form [`ron_options`] reads back: no struct names,
+/// newtype variants unwrapped, `Some` implicit, two-space indent. Serialising plain data
+/// cannot fail; a failure would come back as a RON comment naming it.
+pub fn ron_to_string<T: serde::Serialize + ?Sized>(value: &T) -> String {
+    let cfg = ron::ser::PrettyConfig::new()
+        .struct_names(false)
+        .indentor("  ".to_string())
+        .extensions(
+            ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES
+                | ron::extensions::Extensions::IMPLICIT_SOME,
+        );
+    ron::ser::to_string_pretty(value, cfg).unwrap_or_else(|e| format!("// {e}"))
 }
 
 /// Parses RON with [`ron_options`], reporting errors as `path:line:column: message`.

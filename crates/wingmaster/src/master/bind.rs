@@ -13,14 +13,7 @@ impl WingMasterSpec {
 
     /// The spec as pretty RON.
     pub fn to_ron_string(&self) -> String {
-        let cfg = ron::ser::PrettyConfig::new()
-            .struct_names(false)
-            .indentor("  ".to_string())
-            .extensions(
-                ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES
-                    | ron::extensions::Extensions::IMPLICIT_SOME,
-            );
-        ron::ser::to_string_pretty(self, cfg).unwrap_or_else(|e| format!("// {e}"))
+        param::ron_to_string(self)
     }
 
     /// Every variable name the spec uses, in first-use order (planform sweep, dihedral,
