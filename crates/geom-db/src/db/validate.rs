@@ -177,16 +177,22 @@ impl GeomDb {
                         ),
                     ));
                 }
-                for n in ids {
-                    check_id(
-                        e,
-                        "control node",
-                        n.index(),
-                        self.control_nodes.len(),
-                        "control nodes",
-                    )?;
-                }
+                self.check_control_nodes(e, ids)?;
             }
+        }
+        Ok(())
+    }
+
+    /// Every control node `ids` names exists; the error names `e` and the first missing one.
+    fn check_control_nodes(&self, e: Entity, ids: &[ControlNodeId]) -> Result<()> {
+        for n in ids {
+            check_id(
+                e,
+                "control node",
+                n.index(),
+                self.control_nodes.len(),
+                "control nodes",
+            )?;
         }
         Ok(())
     }
@@ -271,15 +277,7 @@ impl GeomDb {
                         ),
                     ));
                 }
-                for n in ids {
-                    check_id(
-                        e,
-                        "control node",
-                        n.index(),
-                        self.control_nodes.len(),
-                        "control nodes",
-                    )?;
-                }
+                self.check_control_nodes(e, ids)?;
             }
         }
         Ok(())
