@@ -115,31 +115,11 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<()> {
         plot_fit(&airfoil.name, &f, png)?;
     }
     if a.json {
-        outln!("{}", serde_json::to_string(&fit_json(&f))?);
+        outln!("{}", serde_json::to_string(&f.summary_json())?);
     } else {
         print_fit(&shown, &airfoil, &f)?;
     }
     Ok(())
-}
-
-fn fit_json(f: &SectionFit) -> serde_json::Value {
-    let t = &f.params.thickness;
-    serde_json::json!({
-        "name": f.params.name.trim(),
-        "thickness": {
-            "r0": t.r0, "z1": t.z1, "z2": t.z2, "xtmax": t.xtmax, "tmax": t.tmax,
-            "crv4": t.crv4, "x6": t.x6, "z6": t.z6, "phi_te": t.phi_te, "d78": t.d78,
-        },
-        "camber": f.params.camber,
-        "thickness_extra": t.extra,
-        "te_thickness": f.params.te_thickness,
-        "max_error": f.max_error,
-        "rms_error": f.rms_error,
-        "n_points": f.points.len(),
-        "n_design_variables": f.n_design_variables,
-        "iterations": f.iterations,
-        "frame": { "le": f.frame.le, "chord": f.frame.chord, "angle_deg": f.frame.angle.to_degrees() },
-    })
 }
 
 fn print_fit(shown: &str, airfoil: &Airfoil, f: &SectionFit) -> anyhow::Result<()> {

@@ -129,27 +129,7 @@ impl PySectionFit {
 
     /// The object `aeroshape section fit --json` prints.
     fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let f = &self.fit;
-        let t = &f.params.thickness;
-        let json = serde_json::json!({
-            "name": f.params.name.trim(),
-            "thickness": {
-                "r0": t.r0, "z1": t.z1, "z2": t.z2, "xtmax": t.xtmax, "tmax": t.tmax,
-                "crv4": t.crv4, "x6": t.x6, "z6": t.z6, "phi_te": t.phi_te, "d78": t.d78,
-            },
-            "camber": f.params.camber,
-            "thickness_extra": t.extra,
-            "te_thickness": f.params.te_thickness,
-            "max_error": f.max_error,
-            "rms_error": f.rms_error,
-            "n_points": f.points.len(),
-            "n_design_variables": f.n_design_variables,
-            "iterations": f.iterations,
-            "frame": {
-                "le": f.frame.le, "chord": f.frame.chord,
-                "angle_deg": f.frame.angle.to_degrees(),
-            },
-        });
+        let json = self.fit.summary_json();
         arrays::to_python(py, &json)
     }
 

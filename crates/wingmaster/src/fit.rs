@@ -93,6 +93,34 @@ pub struct SectionFit {
     pub n_design_variables: usize,
 }
 
+impl SectionFit {
+    /// The fit's summary as JSON: the named thickness parameters, camber, extra thickness
+    /// terms, trailing-edge thickness, errors, sizes and frame. This is the object that
+    /// `aeroshape section fit --json` prints and Python's `SectionFit.as_dict()` returns.
+    pub fn summary_json(&self) -> serde_json::Value {
+        let t = &self.params.thickness;
+        let frame = &self.frame;
+        serde_json::json!({
+            "name": self.params.name.trim(),
+            "thickness": {
+                "r0": t.r0, "z1": t.z1, "z2": t.z2, "xtmax": t.xtmax, "tmax": t.tmax,
+                "crv4": t.crv4, "x6": t.x6, "z6": t.z6, "phi_te": t.phi_te, "d78": t.d78,
+            },
+            "camber": self.params.camber,
+            "thickness_extra": t.extra,
+            "te_thickness": self.params.te_thickness,
+            "max_error": self.max_error,
+            "rms_error": self.rms_error,
+            "n_points": self.points.len(),
+            "n_design_variables": self.n_design_variables,
+            "iterations": self.iterations,
+            "frame": {
+                "le": frame.le, "chord": frame.chord, "angle_deg": frame.angle.to_degrees(),
+            },
+        })
+    }
+}
+
 /// Fits the section parametrisation to an airfoil read from a file.
 pub fn fit(airfoil: &Airfoil, opts: &FitOptions) -> Result<SectionFit> {
     let na = airfoil.normalise()?;
