@@ -633,15 +633,19 @@ fn junction_point(
 /// The wing-body half model (see the module doc) with `split` junction arcs per chordwise
 /// wing patch (1 for `fixtures/geom/wing_body.ron`, whose curve parameter ranges other
 /// crates' tests rely on; 2 for the chain's default case,
-/// `fixtures/cases/default/wing_body.ron`).
+/// `fixtures/cases/default/wing_body.ron`, whose fuselage cylinder is also of degree 4
+/// along x so that the case's waist modifier has control nodes to move).
 pub fn wing_body(split: usize) -> Result<GeomDb, String> {
     const DEG: usize = 8;
     let len = NOSE + MID + TAIL;
     let mut b = Builder::new("wing-body half model", len);
     let tol = 1e-13 * len;
 
-    // fuselage: 3 patches along x (nose, cylinder, tail) × 2 around (bottom → side → top)
-    let deg_u = [DEG, 1, 2];
+    // fuselage: 3 patches along x (nose, cylinder, tail) × 2 around (bottom → side → top).
+    // The default case's cylinder is of degree 4 along x (the same straight generators,
+    // exactly): its interior control nodes carry the waist at the wing junction (Fig. 9),
+    // which a degree-1 cylinder, with nodes only at its two ends, cannot have.
+    let deg_u = [DEG, if split > 1 { 4 } else { 1 }, 2];
     let mut patches = Vec::new();
     for j in 0..2 {
         for (i, &du) in deg_u.iter().enumerate() {

@@ -218,10 +218,19 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let displacements = match &args.displacements {
+    let mut displacements = match &args.displacements {
         Some(p) => read_displacements(p, m.n_nodes())?,
         None => Vec::new(),
     };
+    // a node of a fixed marker (named by --fixed or by nothing) never moves, even where the
+    // marker meets a sliding one: a zero displacement takes precedence over sliding
+    let given: std::collections::HashSet<u32> = displacements.iter().map(|d| d.0).collect();
+    displacements.extend(
+        aeroshape::precedence::held_nodes(&m, &args.rigid, &args.slide)
+            .into_iter()
+            .filter(|v| !given.contains(v))
+            .map(|v| (v, [0.0; 3])),
+    );
     let request = deform::Request {
         rigid: args.rigid.clone(),
         motion,
@@ -254,6 +263,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    print_summary(&d.report, &args.output)?;
     if let Some(path) = &args.report {
         let r = &d.report;
         let s = r.seconds;
@@ -286,6 +296,33 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
             writeln!(w)
         })?;
     }
+    Ok(())
+}
+
+/// The summary printed on success, as `aeroshape run` prints its own: sizes, solver work,
+/// cell quality before and after, inverted cells.
+fn print_summary(r: &deform::DeformReport, output: &Path) -> std::io::Result<()> {
+    outln!(
+        "{} nodes, {} cells; {} iterations ({} for R) in {} increment(s), residual {:.1e}",
+        r.nodes,
+        r.cells,
+        r.iterations,
+        r.rotation_iterations,
+        r.increments,
+        r.residual
+    );
+    outln!(
+        "quality min {:.4} → {:.4}, mean {:.4} → {:.4}, 1st percentile {:.4} → {:.4}, inverted {} → {}",
+        r.quality_before.min,
+        r.quality_after.min,
+        r.quality_before.mean,
+        r.quality_after.mean,
+        r.quality_before.p1,
+        r.quality_after.p1,
+        r.quality_before.n_nonpositive,
+        r.quality_after.n_nonpositive
+    );
+    outln!("wrote {}", output.display());
     Ok(())
 }
 

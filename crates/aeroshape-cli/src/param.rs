@@ -75,6 +75,9 @@ fn load(case_path: &Path) -> anyhow::Result<(Case, GeomDb, Prepared)> {
         .parametrisation
         .bind(&db, &MasterSources::new())
         .with_context(|| format!("{}: parametrisation", case_path.display()))?;
+    let reach = aeroshape::reach::variable_reach(&prep)
+        .with_context(|| format!("{}: parametrisation", case_path.display()))?;
+    aeroshape::reach::check_live(&reach, case_path)?;
     Ok((case, db, prep))
 }
 

@@ -17,9 +17,11 @@ pub enum SurfgridCmd {
     /// classified (corner / curve + t / surface + (u, v)). Write .msh (parametric nodes),
     /// .su2 or .vtu; prints quality figures.
     Generate(GenerateArgs),
-    /// Classify an imported surface grid (markers named after the surface components) on a
-    /// geometric database by projection; write it with its parameters (.msh) and print
-    /// the distances.
+    /// Classify an imported grid on a geometric database by projection and write it with
+    /// its parameters (.msh) and print the distances. A surface grid: its markers named
+    /// after the surface components. A volume grid: the wall markers (--wall, or every
+    /// marker within the tolerance of the geometry) split by surface component by geometry
+    /// alone; the whole grid is written, cells and markers kept.
     Classify(ClassifyArgs),
 }
 
@@ -79,6 +81,10 @@ pub struct ClassifyArgs {
     /// Largest node distance accepted, relative to the model's reference length.
     #[arg(long, default_value_t = 1e-6, value_name = "REL")]
     pub rel_tol: f64,
+    /// A volume grid's marker that lies on the geometry (repeatable). Default: every marker
+    /// whose nodes are all within the tolerance of the geometry.
+    #[arg(long, value_name = "MARKER")]
+    pub wall: Vec<String>,
 }
 
 /// Runs a `surfgrid` subcommand.
@@ -134,8 +140,29 @@ fn classify(a: &ClassifyArgs) -> anyhow::Result<()> {
         .map_err(anyhow::Error::msg)?;
     let db = super::geom::load(&a.geom)?;
     let m = mesh::io::read_path(&a.grid)?;
-    let (g, rep) = surfgrid::classify(&m, &db, &ClassifyOptions { rel_tol: a.rel_tol })
-        .with_context(|| format!("{}", a.grid.display()))?;
+    let opts = ClassifyOptions { rel_tol: a.rel_tol };
+    let volume = !m.cells.is_empty();
+    let (g, rep) = if volume {
+        let wall = if a.wall.is_empty() {
+            markers_on_geometry(&db, &m, a.rel_tol * db.reference_length())
+                .with_context(|| format!("{}", a.grid.display()))?
+        } else {
+            a.wall.clone()
+        };
+        if wall.is_empty() {
+            bail!(
+                "{}: no marker lies on the geometry {} (within {:.3e}); name the wall with --wall",
+                a.grid.display(),
+                a.geom.display(),
+                a.rel_tol * db.reference_length()
+            );
+        }
+        outln!("wall markers: {}", wall.join(", "));
+        surfgrid::classify_wall(&db, &m, &wall, &opts)
+    } else {
+        surfgrid::classify(&m, &db, &opts)
+    }
+    .with_context(|| format!("{}", a.grid.display()))?;
     outln!(
         "{} corner, {} curve and {} surface nodes; distance max {:.3e} (node {}), mean {:.3e}",
         rep.corners,
@@ -145,7 +172,27 @@ fn classify(a: &ClassifyArgs) -> anyhow::Result<()> {
         rep.worst_node,
         rep.mean_distance
     );
-    let out = g.to_mesh(&db);
+    let out = if volume {
+        g.volume_with_params(&m)
+    } else {
+        g.to_mesh(&db)
+    };
     aeroshape::fsio::write_atomic(&a.output, |w| mesh::io::write(&out, format, w))?;
     Ok(())
+}
+
+/// The markers of `m` whose nodes all lie within `tol` of the geometry.
+fn markers_on_geometry(
+    db: &geom_db::GeomDb,
+    m: &mesh::Mesh,
+    tol: f64,
+) -> anyhow::Result<Vec<String>> {
+    let pr = surfgrid::classify::component_projectors(db)?;
+    let mut out = Vec::new();
+    for mk in &m.markers {
+        if surfgrid::classify::marker_distance(&pr, m, &mk.name, tol)?.max_distance <= tol {
+            out.push(mk.name.clone());
+        }
+    }
+    Ok(out)
 }

@@ -43,6 +43,16 @@ pub enum CaseError {
         /// The version this build reads.
         supported: u32,
     },
+    /// A design variable moves no control node (see [`crate::reach`]).
+    #[error("{path}: design variable {variable:?} (modifier {modifier:?}) moves no control node")]
+    DeadVariable {
+        /// The case file.
+        path: String,
+        /// The variable.
+        variable: String,
+        /// Its modifier.
+        modifier: String,
+    },
 }
 
 /// A case: what the chain works on.
@@ -61,15 +71,16 @@ pub struct Case {
     /// projection (`surfgrid::classify`) either way.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub grid: Option<String>,
-    /// The grid's markers that lie on the geometry and follow it (their triangles belong to
-    /// surface components: by element entity tag = component + 1 in a `.msh`, else by
-    /// projection of the triangle's centroid).
+    /// The grid's markers that lie on the geometry and follow it (their triangles are given
+    /// their surface components by geometry alone, `surfgrid::classify::wall_surface`).
     #[serde(default)]
     pub wall: Vec<String>,
     /// Planar markers whose nodes slide on their plane (e.g. `symmetry`).
     #[serde(default)]
     pub slide: Vec<String>,
-    /// Markers that do not move (e.g. `farfield`); markers named nowhere are fixed too.
+    /// Markers that do not move (e.g. `farfield`); markers named nowhere are fixed too. A
+    /// node of a fixed marker never moves, even on a `slide` marker
+    /// ([`crate::precedence`]).
     #[serde(default)]
     pub fixed: Vec<String>,
     /// Options of the volume deformation (paper §4).

@@ -7,6 +7,8 @@
 
 pub mod case;
 pub mod fsio;
+pub mod precedence;
+pub mod reach;
 pub mod study;
 
 pub use study::{Evaluation, Study};

@@ -228,3 +228,78 @@ fn wall_distance_stiffness_from_the_case_file() {
     let x = s.vector_from_values(&dv).unwrap();
     check_design_vector("default, wall distance", &s, &x);
 }
+
+/// Fig. 9 of the paper: the default case's waist moves the fuselage at the wing junction.
+/// Every variable of the case moves control nodes; `waist_bottom` alone takes fuselage wall
+/// nodes off the baseline fuselage surface near the wing (x in [3, 6]), while those of the
+/// nose and tail stay on it (they may only slide along it, by the surface-grid re-map).
+#[test]
+fn waist_alone_moves_the_fuselage_at_the_junction() {
+    let (s, _) = study("default");
+    let reach = aeroshape::reach::variable_reach_of(&s).unwrap();
+    for r in &reach {
+        assert!(r.nodes_moved > 0, "{r:?}");
+    }
+    let i = s.registry().index_of("waist_bottom").unwrap();
+    let mut x = s.initial();
+    x[i] = -0.05;
+    let ev = s.evaluate(&x).unwrap();
+    assert_eq!(ev.report.quality_after.inverted, 0);
+    let db = s.geometry();
+    let popts = ProjectOptions::default().with_length_scale(db.reference_length());
+    let fc = db
+        .surface_components
+        .iter()
+        .find(|c| c.name == "fuselage")
+        .unwrap();
+    let pr = SurfaceProjector::new("fuselage", db.surface(fc.surface), &popts).unwrap();
+    let base = s.baseline();
+    let (mut near, mut far) = (0.0f64, 0.0f64);
+    for &v in &base.marker("fuselage").unwrap().elements.node_set() {
+        let (p, q) = (base.coords[v as usize], ev.grid.coords[v as usize]);
+        let off = pr.project(&Point3::new(q[0], q[1], q[2])).unwrap().distance;
+        if (3.0..=6.0).contains(&p[0]) {
+            near = near.max(off);
+        } else if !(1.5..=7.5).contains(&p[0]) {
+            far = far.max(off);
+        }
+    }
+    assert!(
+        near > 0.01,
+        "the waist takes the fuselage near the wing off its surface by {near:e}"
+    );
+    assert!(
+        far < 1e-8,
+        "nose and tail stay on the baseline fuselage ({far:e})"
+    );
+}
+
+/// A design variable that moves no control node is an error naming it when the case is
+/// loaded: a spanwise bump on the wing, whose support surface has control nodes only at the
+/// root and the tip, where the bump vanishes (the pattern of the old default waist).
+#[test]
+fn dead_design_variable_is_an_error_naming_it() {
+    let path = case_dir("default").join("case.ron");
+    let mut case = aeroshape::case::Case::load(&path).unwrap();
+    let text = r#"Surface(
+        name: "spanwise",
+        surfaces: [1],
+        basis_u: Bernstein(degree: 1),
+        basis_v: Bernstein(degree: 2),
+        active_u: [0],
+        active_v: [1],
+        form: Tensor(variables: [(name: "dead", lower: -0.1, upper: 0.1)]),
+    )"#;
+    let m: param::Modifier = param::ron_options().from_str(text).unwrap();
+    case.parametrisation.modifiers.push(m);
+    let e = Study::new(case, &path).unwrap_err();
+    assert!(
+        matches!(&e, aeroshape::study::StudyError::Case(aeroshape::case::CaseError::DeadVariable { variable, .. }) if variable == "dead"),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .contains("\"dead\" (modifier \"spanwise\") moves no control node"),
+        "{e}"
+    );
+}

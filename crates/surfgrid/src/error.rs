@@ -98,6 +98,20 @@ pub enum Error {
         /// The marker name.
         marker: String,
     },
+    /// No surface component's foot of the normal (Eq. 11) converged from a wall triangle's
+    /// centroid, so the triangle cannot be given a component.
+    #[error(
+        "node {node} of marker {marker:?}: no surface component's projection converged from its triangle's centroid ({})",
+        attempts.iter().map(|(c, r)| format!("{c}: residual {r:.3e}")).collect::<Vec<_>>().join(", ")
+    )]
+    NoComponent {
+        /// The marker.
+        marker: String,
+        /// The triangle's first node (index in the grid).
+        node: usize,
+        /// Per surface component tried: its name and the residual its Newton stopped at.
+        attempts: Vec<(String, f64)>,
+    },
     /// A wall marker named by the caller is not in the grid.
     #[error("wall marker {marker:?} is not in the grid (markers: {})", available.join(", "))]
     MissingMarker {

@@ -169,35 +169,69 @@ impl SurfaceGrid {
                 }
             })
             .collect();
-        m.classes = Some(
-            self.support
-                .iter()
-                .map(|s| match *s {
-                    NodeSupport::Corner(c) => NodeClass {
-                        dim: 0,
-                        entity: c.0 as i32 + 1,
-                        param: [0.0, 0.0],
-                    },
-                    NodeSupport::Curve { comp, t } => NodeClass {
-                        dim: 1,
-                        entity: comp.0 as i32 + 1,
-                        param: [t, 0.0],
-                    },
-                    NodeSupport::Surface { comp, uv } => NodeClass {
-                        dim: 2,
-                        entity: comp.0 as i32 + 1,
-                        param: uv,
-                    },
-                    NodeSupport::Free => NodeClass {
-                        dim: 3,
-                        entity: 1,
-                        param: [0.0, 0.0],
-                    },
-                })
-                .collect(),
-        );
+        m.classes = Some(self.to_mesh_classes());
         m.parametric = true;
         m
+    }
+
+    /// The volume grid `grid` (whose wall this grid is: same node numbering) with its cells
+    /// and markers (names kept) and this grid's classification: wall nodes snapped onto
+    /// their entity and classified as in [`to_mesh`](Self::to_mesh) (corner k → (0, k+1),
+    /// curve component k → (1, k+1, [t, 0]), surface component k → (2, k+1, [u, v])), the
+    /// other nodes in the volume (3, 1). The mesher's entities, entity tags and physical
+    /// names are dropped (their numbering is not the database's); the MSH writer makes one
+    /// entity per marker. Writable as MSH 4.1 with parametric nodes.
+    pub fn volume_with_params(&self, grid: &Mesh) -> Mesh {
+        let mut m = grid.clone();
+        let classes = self.to_mesh_classes();
+        for (i, c) in classes.iter().enumerate() {
+            if c.dim < 3 {
+                let p = self.coords[i];
+                m.coords[i] = [p.x, p.y, p.z];
+            }
+        }
+        m.classes = Some(classes);
+        m.parametric = true;
+        m.entities.clear();
+        m.physical_names.clear();
+        for g in m.cells.groups_mut() {
+            g.entity.clear();
+        }
+        for mk in &mut m.markers {
+            for g in mk.elements.groups_mut() {
+                g.entity.clear();
+            }
+        }
+        m
+    }
+
+    /// The Gmsh-like classification of every node (see [`to_mesh`](Self::to_mesh)).
+    fn to_mesh_classes(&self) -> Vec<NodeClass> {
+        self.support
+            .iter()
+            .map(|s| match *s {
+                NodeSupport::Corner(c) => NodeClass {
+                    dim: 0,
+                    entity: c.0 as i32 + 1,
+                    param: [0.0, 0.0],
+                },
+                NodeSupport::Curve { comp, t } => NodeClass {
+                    dim: 1,
+                    entity: comp.0 as i32 + 1,
+                    param: [t, 0.0],
+                },
+                NodeSupport::Surface { comp, uv } => NodeClass {
+                    dim: 2,
+                    entity: comp.0 as i32 + 1,
+                    param: uv,
+                },
+                NodeSupport::Free => NodeClass {
+                    dim: 3,
+                    entity: 1,
+                    param: [0.0, 0.0],
+                },
+            })
+            .collect()
     }
 
     /// Writes the parameters of this grid's nodes into the classification of a grid with the

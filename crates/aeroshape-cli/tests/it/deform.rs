@@ -294,3 +294,147 @@ fn slide_on_geometry_supports_from_parametric_msh() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("not planar"));
 }
+
+fn gmsh_grid(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/grids")
+        .join(name)
+}
+
+/// Precedence on a Gmsh-made grid (split wing in a half sphere): the far field meets the
+/// symmetry plane along a half circle. Pitching the wing with `--slide symmetry --fixed
+/// farfield`, every far-field node stays where it was, bit for bit (those on the symmetry
+/// plane included), and the symmetry nodes stay in their plane; the summary is printed.
+#[test]
+fn fixed_marker_wins_over_sliding_and_summary_printed() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.su2");
+    let input = gmsh_grid("split_wing.su2");
+    let o = bin()
+        .arg("deform")
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .args([
+            "--rigid",
+            "wing",
+            "--rotate-deg",
+            "3",
+            "--axis-dir",
+            "0,1,0",
+        ])
+        .args(["--slide", "symmetry", "--fixed", "farfield"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains(" nodes, ") && stdout.contains(" iterations"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("inverted 0 → 0"), "{stdout}");
+    let (a, b) = (read(&input), read(&out));
+    let far = a.marker("farfield").unwrap().elements.node_set();
+    let sym = a.marker("symmetry").unwrap().elements.node_set();
+    let seam: Vec<u32> = far.iter().copied().filter(|v| sym.contains(v)).collect();
+    assert!(
+        seam.len() > 10,
+        "the grid has far-field nodes on the symmetry plane"
+    );
+    for &v in &far {
+        assert_eq!(
+            b.coords[v as usize], a.coords[v as usize],
+            "far-field node {v}"
+        );
+    }
+    let mut moved = 0;
+    for &v in &sym {
+        assert!(b.coords[v as usize][1].abs() <= 1e-12, "symmetry node {v}");
+        moved += usize::from(b.coords[v as usize] != a.coords[v as usize]);
+    }
+    assert!(moved > 100, "symmetry nodes slide ({moved} moved)");
+}
+
+/// A node on two sliding planes slides on their intersection: the default case's far-field
+/// box split into its faces, the bottom face z = z_min sliding as well as the symmetry plane
+/// y = 0; their common edge's nodes keep both y and z and may move along x only.
+#[test]
+fn node_on_two_sliding_planes_keeps_to_their_line() {
+    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/cases/default");
+    let mut g = read(&case.join("grid.msh"));
+    let far = g.marker("farfield").unwrap().elements.clone();
+    let (lo, _) = g.bbox();
+    let mut bottom = mesh::Elements::new();
+    let mut rest = mesh::Elements::new();
+    for grp in far.groups() {
+        for t in grp.iter() {
+            let flat = t.iter().all(|&v| g.coords[v as usize][2] == lo[2]);
+            let e = if flat { &mut bottom } else { &mut rest };
+            e.push(grp.kind, t, None);
+        }
+    }
+    g.markers.retain(|m| m.name != "farfield");
+    for (name, elements) in [("bottom", bottom), ("farfield", rest)] {
+        g.markers.push(mesh::Marker {
+            name: name.into(),
+            tag: None,
+            elements,
+        });
+    }
+    g.classes = None;
+    g.parametric = false;
+    g.entities.clear();
+    g.physical_names.clear();
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("split.su2");
+    let mut f = std::fs::File::create(&input).unwrap();
+    mesh::io::write(&g, mesh::io::Format::Su2, &mut f).unwrap();
+    drop(f);
+    let g = read(&input);
+    let out = dir.path().join("out.su2");
+    let o = bin()
+        .arg("deform")
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .args([
+            "--rigid",
+            "wing",
+            "--rigid",
+            "fuselage",
+            "--translate",
+            "0.2,0,-0.1",
+        ])
+        .args([
+            "--slide", "symmetry", "--slide", "bottom", "--fixed", "farfield",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let b = read(&out);
+    let sym = g.marker("symmetry").unwrap().elements.node_set();
+    let bot = g.marker("bottom").unwrap().elements.node_set();
+    let far = g.marker("farfield").unwrap().elements.node_set();
+    let line: Vec<u32> = sym
+        .iter()
+        .copied()
+        .filter(|v| bot.contains(v) && !far.contains(v))
+        .collect();
+    assert!(line.len() > 3, "the grid has nodes on both sliding planes");
+    let mut along = 0.0f64;
+    for &v in &line {
+        let (p, q) = (g.coords[v as usize], b.coords[v as usize]);
+        assert!(
+            q[1].abs() <= 1e-12 && (q[2] - p[2]).abs() <= 1e-12,
+            "node {v}: {p:?} → {q:?}"
+        );
+        along = along.max((q[0] - p[0]).abs());
+    }
+    assert!(along > 1e-4, "the edge nodes slide along x ({along:e})");
+    for &v in &far {
+        assert_eq!(
+            b.coords[v as usize], g.coords[v as usize],
+            "far-field node {v}"
+        );
+    }
+}

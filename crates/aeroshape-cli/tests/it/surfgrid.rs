@@ -124,3 +124,82 @@ fn a_bad_line_source_is_refused() {
     assert!(e.contains("expected 9 numbers"), "{e}");
     assert!(!out.exists());
 }
+
+/// A volume grid classified whole: the default case's grid as SU2 (no parameters, markers
+/// renamed as another mesher might) classified on its geometry gives back the volume cells,
+/// the markers with their names and, on the wall (found by geometry), the classification
+/// aeroshape wrote in `grid.msh`.
+#[test]
+fn volume_grid_classified_keeps_cells_and_markers() {
+    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/cases/default");
+    let orig = mesh::io::read_path(&case.join("grid.msh")).unwrap();
+    let mut g = orig.clone();
+    for m in &mut g.markers {
+        m.name = format!("BC_{}", m.name.to_uppercase());
+    }
+    g.classes = None;
+    g.parametric = false;
+    g.entities.clear();
+    g.physical_names.clear();
+    for grp in g.cells.groups_mut() {
+        grp.entity.clear();
+    }
+    for m in &mut g.markers {
+        for grp in m.elements.groups_mut() {
+            grp.entity.clear();
+        }
+    }
+    let su2 = tmp("volume.su2");
+    let mut f = std::fs::File::create(&su2).unwrap();
+    mesh::io::write(&g, mesh::io::Format::Su2, &mut f).unwrap();
+    drop(f);
+    let out = tmp("volume_classified.msh");
+    let o = run(&[
+        "surfgrid".as_ref(),
+        "classify".as_ref(),
+        case.join("wing_body.ron").as_os_str(),
+        su2.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("wall markers: "))
+        .unwrap();
+    let mut found: Vec<&str> = line["wall markers: ".len()..].split(", ").collect();
+    found.sort_unstable();
+    assert_eq!(found, ["BC_FUSELAGE", "BC_WING"], "{stdout}");
+    let c = mesh::io::read_path(&out).unwrap();
+    assert_eq!(c.cells, orig.cells);
+    let names = |m: &mesh::Mesh| m.markers.iter().map(|k| k.name.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&c), names(&g));
+    for (a, b) in c.markers.iter().zip(&orig.markers) {
+        assert_eq!(
+            a.elements.node_set(),
+            b.elements.node_set(),
+            "marker {}",
+            a.name
+        );
+    }
+    let (cc, oc) = (c.classes.as_ref().unwrap(), orig.classes.as_ref().unwrap());
+    let wall: std::collections::BTreeSet<u32> = ["wing", "fuselage"]
+        .iter()
+        .flat_map(|n| orig.marker(n).unwrap().elements.node_set())
+        .collect();
+    for v in 0..orig.n_nodes() {
+        let (a, b) = (cc[v], oc[v]);
+        if wall.contains(&(v as u32)) {
+            assert_eq!((a.dim, a.entity), (b.dim, b.entity), "wall node {v}");
+            assert!(
+                (a.param[0] - b.param[0]).abs() <= 1e-9 && (a.param[1] - b.param[1]).abs() <= 1e-9,
+                "wall node {v}: {:?} vs {:?}",
+                a.param,
+                b.param
+            );
+        } else {
+            assert_eq!(a.dim, 3, "node {v} off the wall");
+        }
+    }
+}

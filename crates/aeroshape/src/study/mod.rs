@@ -159,6 +159,11 @@ impl Study {
         &self.setup
     }
 
+    /// The bound parametrisation.
+    pub(crate) fn prepared(&self) -> &Prepared {
+        &self.prepared
+    }
+
     /// The design-variable registry.
     pub fn registry(&self) -> &param::Registry {
         self.prepared.registry()

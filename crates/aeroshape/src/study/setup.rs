@@ -32,7 +32,8 @@ struct Wall {
     surface: SurfaceGrid,
     /// True for the wall nodes.
     nodes: Vec<bool>,
-    /// Nodes of `fixed` markers that are not wall nodes, sorted.
+    /// Nodes of `fixed` markers, and of markers named nowhere that touch a sliding one
+    /// ([`crate::precedence::held_nodes`]), that are not wall nodes; sorted.
     fixed_nodes: Vec<u32>,
     /// Largest wall-node distance from the geometry found by the classification.
     max_distance: f64,
@@ -87,13 +88,18 @@ fn read_inputs(case: &Case, case_path: &Path) -> Result<Inputs> {
 
 /// Stage 2: the parametrisation bound to the geometry, with the case's wing masters as the
 /// sources of its `External` master modifiers.
-fn bind_parametrisation(case: &Case, db: &GeomDb) -> Result<Prepared> {
+///
+/// A design variable that moves no control node is an error naming it
+/// ([`crate::reach::check_live`]).
+fn bind_parametrisation(case: &Case, case_path: &Path, db: &GeomDb) -> Result<Prepared> {
     let masters = if case.wing_masters.is_empty() {
         MasterSources::new()
     } else {
         wingmaster::master::master_sources(db, &case.parametrisation, &case.wing_masters)?
     };
-    Ok(case.parametrisation.bind(db, &masters)?)
+    let prepared = case.parametrisation.bind(db, &masters)?;
+    crate::reach::check_live(&crate::reach::variable_reach(&prepared)?, case_path)?;
+    Ok(prepared)
 }
 
 /// Stage 3: the model update seeded on the baseline geometry.
@@ -126,6 +132,11 @@ fn tie_wall(case: &Case, inputs: &Inputs) -> Result<Wall> {
         .iter()
         .filter_map(|m| inputs.grid.marker(m))
         .flat_map(|m| m.elements.node_set())
+        .chain(crate::precedence::held_nodes(
+            &inputs.grid,
+            &case.wall,
+            &case.slide,
+        ))
         .filter(|&v| !nodes[v as usize])
         .collect();
     fixed_nodes.sort_unstable();
@@ -184,7 +195,7 @@ impl Study {
     /// the wall nodes on the geometry and sets up the volume deformation.
     pub fn new(case: Case, case_path: &Path) -> Result<Self> {
         let (inputs, read) = timed(|| read_inputs(&case, case_path))?;
-        let (prepared, t_param) = timed(|| bind_parametrisation(&case, &inputs.db))?;
+        let (prepared, t_param) = timed(|| bind_parametrisation(&case, case_path, &inputs.db))?;
         let (model, t_model) = timed(|| seed_model(&inputs))?;
         let (wall, t_classify) = timed(|| tie_wall(&case, &inputs))?;
         let (deformer, t_deform) = timed(|| deform_setup(&case, &inputs, &wall))?;

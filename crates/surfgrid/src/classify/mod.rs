@@ -25,7 +25,9 @@
 //! 6. the report, then the nodes snapped onto their entity.
 //!
 //! [`wall`] ties the wall of a volume grid to the geometry: it splits the wall markers'
-//! triangles by surface component (the input of [`classify`]), then classifies them.
+//! triangles by surface component by geometry alone (the input of [`classify`]), then
+//! classifies them. [`markers`] measures how far a marker lies from the geometry (which
+//! markers are the body's).
 
 use geom_db::GeomDb;
 use geom_db::prelude::Point3;
@@ -36,10 +38,12 @@ use crate::error::Result;
 use crate::grid::{NodeSupport, SurfaceGrid};
 
 mod local;
+pub mod markers;
 mod supports;
 mod topology;
 pub mod wall;
 
+pub use markers::{MarkerDistance, marker_distance, node_distance};
 pub use wall::{classify_wall, component_projectors, nearest_component, wall_surface};
 
 /// Knobs of the classification.

@@ -6,3 +6,4 @@ mod curves;
 mod generate;
 mod poles;
 mod update;
+mod wall;
