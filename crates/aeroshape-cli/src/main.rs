@@ -21,6 +21,7 @@ macro_rules! outln {
     }};
 }
 
+mod case;
 mod deform;
 mod geom;
 mod geom_import;
@@ -42,6 +43,9 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Make a ready case from your own CAD and grid (`case init`).
+    #[command(subcommand)]
+    Case(case::CaseCmd),
     /// Deform a volume mesh from prescribed boundary motion (spring analogy, paper §4).
     Deform(deform::DeformArgs),
     /// Inspect and check geometric databases (RON).
@@ -144,6 +148,7 @@ where
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Case(cmd) => case::run(cmd),
         Command::Deform(args) => deform::run(args),
         Command::Geom(cmd) => geom::run(cmd),
         Command::Mesh(cmd) => mesh::run(cmd),

@@ -7,6 +7,7 @@
 
 pub mod case;
 pub mod fsio;
+pub mod init;
 pub mod precedence;
 pub mod reach;
 pub mod study;

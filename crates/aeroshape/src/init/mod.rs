@@ -1,0 +1,253 @@
+//! `case init`: a ready case from a user's own geometry and grid ([`init_case`]).
+//!
+//! Stages, each on the previous one's result:
+//! 1. the tolerance of the geometry ([`Tolerance`]): the largest of the default relative
+//!    tolerance and the CAD's own figures (its resolution, the sewing gaps measured at
+//!    import), each printed with its source;
+//! 2. the markers' roles by shape alone ([`roles::marker_roles`]): far field fixed, planes
+//!    sliding, markers on the geometry wall;
+//! 3. the wall tied to the geometry by geometry alone (`surfgrid::classify_wall`), and the
+//!    whole volume grid written with parametric wall nodes (`DIR/grid.msh`), the geometry
+//!    (`DIR/geometry.ron`) and the case (`DIR/case.ron`);
+//! 4. the default design space ([`space`]), with every variable that moves no control node
+//!    left out, and its bounds checked by the study: each variable alone at either bound
+//!    leaves every cell valid.
+
+use std::path::{Path, PathBuf};
+
+use geom_db::GeomDb;
+use mesh::Mesh;
+use serde::Serialize;
+
+use crate::case::{CASE_FORMAT_VERSION, Case};
+use crate::fsio::write_atomic;
+use crate::study::{Study, StudyError};
+
+pub mod roles;
+pub mod space;
+
+pub use roles::{MarkerRole, Role};
+pub use space::VariableCheck;
+
+/// Errors of `case init`; each names the file, marker or variable.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum InitError {
+    /// No marker of the grid lies on the geometry.
+    #[error("no marker of the grid lies on the geometry within {tol:.3e} ({})", roles.iter().map(|r| format!("{}: {}", r.marker, r.why)).collect::<Vec<_>>().join("; "))]
+    NoWall {
+        /// The tolerance.
+        tol: f64,
+        /// What each marker was found to be.
+        roles: Vec<MarkerRole>,
+    },
+    /// A variable inverts cells even at its smallest bound tried.
+    #[error("design variable {variable:?} inverts cells even at ±{bound:.3e}")]
+    Bounds {
+        /// The variable.
+        variable: String,
+        /// The last bound tried.
+        bound: f64,
+    },
+    /// Classification or marker distances on the geometry.
+    #[error("classification: {0}")]
+    Surfgrid(#[from] surfgrid::Error),
+    /// The parametrisation could not be bound.
+    #[error("param: {0}")]
+    Param(#[from] param::Error),
+    /// The study of the new case could not be built or evaluated.
+    #[error(transparent)]
+    Study(#[from] StudyError),
+    /// An output file could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::fsio::WriteError),
+}
+
+/// One figure the geometric tolerance is taken from.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Tolerance {
+    /// Where it comes from (e.g. "sewing gaps measured at import (largest × 2)").
+    pub source: String,
+    /// The distance (model units).
+    pub value: f64,
+}
+
+/// Options of [`init_case`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct InitOptions {
+    /// A tolerance given by the user, relative to the model's reference length (replaces
+    /// the largest of the sources).
+    pub rel_tol: Option<f64>,
+    /// First bound of each design variable, relative to the wall's box diagonal.
+    pub bound_rel: f64,
+    /// Largest number of halvings of a bound in the check.
+    pub max_halvings: usize,
+}
+
+impl Default for InitOptions {
+    fn default() -> Self {
+        Self {
+            rel_tol: None,
+            bound_rel: 0.01,
+            max_halvings: 8,
+        }
+    }
+}
+
+/// What `case init` found and wrote.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct InitReport {
+    /// The tolerance sources considered.
+    pub tolerances: Vec<Tolerance>,
+    /// The tolerance used (the largest source, or the user's).
+    pub tolerance: f64,
+    /// Each marker's role.
+    pub markers: Vec<MarkerRole>,
+    /// The wall's classification.
+    pub classify: surfgrid::ClassifyReport,
+    /// The design variables with their checked bounds.
+    pub variables: Vec<VariableCheck>,
+    /// The case file written.
+    pub case: PathBuf,
+    /// Candidate variables left out, and why.
+    pub notes: Vec<String>,
+}
+
+/// Makes the case in `dir` from `db` (whose CAD gave the tolerance sources `cad`) and the
+/// volume grid `grid`; see the module doc.
+pub fn init_case(
+    db: &GeomDb,
+    grid: &Mesh,
+    cad: &[Tolerance],
+    dir: &Path,
+    opts: &InitOptions,
+) -> Result<InitReport, InitError> {
+    let lref = db.reference_length();
+    let mut tolerances = vec![Tolerance {
+        source: "default: 1e-6 of the model's reference length".into(),
+        value: 1e-6 * lref,
+    }];
+    tolerances.extend_from_slice(cad);
+    let tol = match opts.rel_tol {
+        Some(r) => r * lref,
+        None => tolerances.iter().map(|t| t.value).fold(0.0, f64::max),
+    };
+    let markers = roles::marker_roles(db, grid, tol)?;
+    let of = |role: Role| -> Vec<String> {
+        markers
+            .iter()
+            .filter(|m| m.role == role)
+            .map(|m| m.marker.clone())
+            .collect()
+    };
+    let (wall, slide, fixed) = (of(Role::Wall), of(Role::Slide), of(Role::Fixed));
+    if wall.is_empty() {
+        return Err(InitError::NoWall {
+            tol,
+            roles: markers,
+        });
+    }
+    let copts = surfgrid::ClassifyOptions {
+        rel_tol: tol / lref,
+    };
+    let (surface, classify) = surfgrid::classify_wall(db, grid, &wall, &copts)?;
+    let volume = surface.volume_with_params(grid);
+    let geometry_path = dir.join("geometry.ron");
+    let grid_path = dir.join("grid.msh");
+    let case_path = dir.join("case.ron");
+    write_atomic(&geometry_path, |w| db.write_ron(w))?;
+    write_atomic(&grid_path, |w| {
+        mesh::io::write(
+            &volume,
+            mesh::io::Format::Msh(mesh::msh::Encoding::Binary),
+            w,
+        )
+    })?;
+    // the default design space: one bump per wall surface, dead ones left out
+    let mut walls: Vec<usize> = surface.components.iter().map(|c| c.comp.index()).collect();
+    walls.sort_unstable();
+    walls.dedup();
+    let wall_size = wall_diagonal(grid, &wall);
+    let mut parametrisation = space::candidate_space(db, &walls, opts.bound_rel * wall_size);
+    let mut notes = Vec::new();
+    parametrisation.modifiers.retain(|m| {
+        let one = param::Parametrisation {
+            modifiers: vec![m.clone()],
+            constraints: Vec::new(),
+        };
+        let live = one
+            .bind(db, &param::MasterSources::new())
+            .and_then(|p| crate::reach::variable_reach(&p));
+        match live {
+            Ok(r) if r.iter().all(|r| r.nodes_moved > 0) => true,
+            Ok(_) => {
+                notes.push(format!("{}: left out, it moves no control node", m.name()));
+                false
+            }
+            Err(e) => {
+                notes.push(format!("{}: left out: {e}", m.name()));
+                false
+            }
+        }
+    });
+    let mut case = Case {
+        format_version: CASE_FORMAT_VERSION,
+        geometry: "geometry.ron".into(),
+        parametrisation,
+        grid: Some("grid.msh".into()),
+        wall,
+        slide,
+        fixed,
+        deform: Default::default(),
+        surface_grid: crate::case::SurfaceGridSettings {
+            classify_rel_tol: tol / lref,
+            ..Default::default()
+        },
+        wing_masters: Default::default(),
+    };
+    let study = Study::new(case.clone(), &case_path)?;
+    let variables = space::check_bounds(&study, opts.max_halvings)?;
+    for m in &mut case.parametrisation.modifiers {
+        if let param::Modifier::Surface(s) = m
+            && let param::SurfaceForm::Tensor { variables: vs } = &mut s.form
+        {
+            for v in vs {
+                if let Some(c) = variables.iter().find(|c| c.name == v.name) {
+                    v.lower = -c.bound;
+                    v.upper = c.bound;
+                    v.scale = c.bound / 10.0;
+                }
+            }
+        }
+    }
+    let text = format!(
+        "// Made by `aeroshape case init` (see docs/guide.md): markers by shape, wall tied to\n\
+         // the geometry, one normal bump per wall surface with bounds checked by the study.\n{}\n",
+        case.to_ron_string()
+    );
+    write_atomic(&case_path, |w| w.write_all(text.as_bytes()))?;
+    Ok(InitReport {
+        tolerances,
+        tolerance: tol,
+        markers,
+        classify,
+        variables,
+        case: case_path,
+        notes,
+    })
+}
+
+/// The diagonal of the box of the `wall` markers' nodes.
+fn wall_diagonal(grid: &Mesh, wall: &[String]) -> f64 {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for m in wall.iter().filter_map(|w| grid.marker(w)) {
+        for v in m.elements.node_set() {
+            for k in 0..3 {
+                lo[k] = lo[k].min(grid.coords[v as usize][k]);
+                hi[k] = hi[k].max(grid.coords[v as usize][k]);
+            }
+        }
+    }
+    (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt()
+}
