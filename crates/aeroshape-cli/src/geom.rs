@@ -187,17 +187,6 @@ fn print_topology(r: &geom_db::CheckReport) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Samples per arc for the intersection residuals of `geom check`.
-const INTERSECTION_SAMPLES: usize = 50;
-
-fn curve_name(r: &intersect::check::CurveResidual) -> String {
-    if r.name.is_empty() {
-        r.curve.to_string()
-    } else {
-        format!("{} ({})", r.curve, r.name)
-    }
-}
-
 fn check(a: &CheckArgs) -> anyhow::Result<()> {
     if !(a.gap_rel.is_finite() && a.gap_rel > 0.0) {
         anyhow::bail!("--gap-rel must be a positive number, got {}", a.gap_rel);
@@ -207,16 +196,17 @@ fn check(a: &CheckArgs) -> anyhow::Result<()> {
         gap_rel: a.gap_rel,
         ..CheckOptions::default()
     });
-    // intersection residuals: each support curve with two defining surfaces against both,
-    // between its control points (intersect::check, foot of the normal, Eq. 11)
-    let inter = intersect::check::model_intersection_residuals(&db, INTERSECTION_SAMPLES)
-        .with_context(|| format!("{}: intersection residuals", a.geom.display()))?;
+    // junction accuracy: each support curve with two defining surfaces sampled (≥ 200 per
+    // arc) against both, foot of the normal (Eq. 11) — the measure of the model update
+    let inter = db
+        .junctions_accuracy(&geom_db::check::AccuracyOptions::default())
+        .with_context(|| format!("{}: junction accuracy", a.geom.display()))?;
     for r in &inter {
-        if r.deviation.max() > report.gap_tolerance {
+        if r.max() > report.gap_tolerance || r.max().is_nan() {
             report.problems.push(format!(
                 "{} is {:.3e} away from its defining surfaces {} and {} (tolerance {:.3e})",
-                curve_name(r),
-                r.deviation.max(),
+                r.label,
+                r.max(),
                 r.surfaces[0],
                 r.surfaces[1],
                 report.gap_tolerance
@@ -256,14 +246,19 @@ fn check(a: &CheckArgs) -> anyhow::Result<()> {
             None => outln!("  max gap             none measured"),
         }
         for r in &inter {
+            let d = &r.distance.surfaces;
             outln!(
-                "  intersection        {}: max {:.3e} from {}, {:.3e} from {} ({} samples)",
-                curve_name(r),
-                r.deviation.max_distance[0],
+                "  intersection        {}: max {:.3e} from {} (rms {:.1e}, t = {:.4}), {:.3e} from {} (rms {:.1e}, t = {:.4}) ({} samples)",
+                r.label,
+                d[0].max,
                 r.surfaces[0],
-                r.deviation.max_distance[1],
+                d[0].rms,
+                d[0].at_t,
+                d[1].max,
                 r.surfaces[1],
-                r.deviation.samples
+                d[1].rms,
+                d[1].at_t,
+                r.distance.samples
             );
         }
         for p in &report.problems {

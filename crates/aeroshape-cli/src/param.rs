@@ -53,6 +53,15 @@ pub struct ApplyArgs {
     /// Apply even if linear constraints are violated (they are still reported).
     #[arg(long)]
     pub allow_infeasible: bool,
+    /// Also write the model update's report as JSON (the `model` record of `aeroshape run`'s
+    /// report.json, with each junction's sampled distance to its surfaces, and the update's
+    /// full report).
+    #[arg(long, value_name = "report.json")]
+    pub report: Option<PathBuf>,
+    /// Tolerance of a junction's sampled distance to its defining surfaces (and of a
+    /// corner's to its curves and surfaces), relative to the model size.
+    #[arg(long, value_name = "REL", default_value_t = 1e-8)]
+    pub junction_tol: f64,
 }
 
 /// Runs a `param` subcommand.
@@ -202,6 +211,15 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
     if let Some(j) = &a.jacobian {
         ensure_not_input(j, &inputs).map_err(anyhow::Error::msg)?;
     }
+    if let Some(r) = &a.report {
+        ensure_not_input(r, &inputs).map_err(anyhow::Error::msg)?;
+    }
+    if !(a.junction_tol.is_finite() && a.junction_tol > 0.0) {
+        bail!(
+            "--junction-tol must be a positive number, got {}",
+            a.junction_tol
+        );
+    }
     let reg = prep.registry();
     let x = match &a.dv {
         Some(p) => {
@@ -234,10 +252,28 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
         .zip(db.control_points())
         .map(|(p, q)| (p - q).norm())
         .fold(0.0, f64::max);
-    let opts = intersect::update::UpdateOptions::default();
+    let opts = intersect::update::UpdateOptions::default().with_junction_rel_tol(a.junction_tol);
+    let t0 = std::time::Instant::now();
     let (new_db, report) = intersect::update::update_model(&db, &pts, &opts)
         .with_context(|| format!("{}: model update", a.case.display()))?;
+    let model = aeroshape::study::ModelPhase::from_update(
+        &report,
+        db.reference_length(),
+        t0.elapsed().as_secs_f64(),
+    );
     write_atomic(&a.output, |w| new_db.write_ron(w))?;
+    if let Some(path) = &a.report {
+        let v = serde_json::json!({
+            "case": a.case.display().to_string(),
+            "design_vector": a.dv.as_ref().map(|p| p.display().to_string()),
+            "model": model,
+            "update": report,
+        });
+        write_atomic(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &v).map_err(std::io::Error::other)?;
+            writeln!(w)
+        })?;
+    }
     if let (Some(path), Some(j)) = (&a.jacobian, &jac) {
         let names = reg.names();
         write_atomic(path, |w| j.write_json(&names, w))?;
@@ -255,6 +291,7 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
         corners,
         report.max_corner_residual
     );
+    outln!("{}", model.junction_summary());
     outln!("wrote {}", a.output.display());
     if let (Some(path), Some(j)) = (&a.jacobian, &jac) {
         outln!(

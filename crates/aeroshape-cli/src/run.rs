@@ -160,7 +160,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         writeln!(w)
     })?;
     outln!(
-        "param {:.3} s ({} control nodes moved, max {:.3e}); model update {:.3} s (junction residual {:.2e}, {:.2e} relative); surface grid {:.3} s ({} nodes moved); deform {:.3} s ({} iterations, residual {:.1e})",
+        "param {:.3} s ({} control nodes moved, max {:.3e}); model update {:.3} s (control-point residual {:.2e}, {:.2e} relative); surface grid {:.3} s ({} nodes moved); deform {:.3} s ({} iterations, residual {:.1e})",
         r.param.seconds,
         r.param.nodes_moved,
         r.param.max_move,
@@ -173,6 +173,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         r.deform.iterations(),
         r.deform.report.as_ref().map_or(0.0, |d| d.residual)
     );
+    outln!("{}", r.model.junction_summary());
     outln!(
         "quality min {:.4} → {:.4}, mean {:.4} → {:.4}, 1st percentile {:.4} → {:.4}, inverted {} → {}",
         r.quality_before.min,

@@ -121,6 +121,26 @@ fn check_design_vector(case: &str, s: &Study, x: &[f64]) {
             .all(|(a, b)| a.to_bits() == b.to_bits()),
         "{case}: cell quality of the returned grid"
     );
+    // every re-intersected junction sampled (≥ 200 per arc) and within 1e-8 of the model
+    // size of both surfaces; the report says so
+    let m = &r.model;
+    assert!(
+        m.curves_reintersected > 0 && !m.junctions.is_empty(),
+        "{case}: {m:#?}"
+    );
+    for j in &m.junctions {
+        assert!(j.samples >= 200 * j.degrees.len(), "{case}: {j:?}");
+        assert!(
+            j.max[0].max(j.max[1]) <= m.junction_tolerance,
+            "{case}: {j:?}"
+        );
+    }
+    assert!(m.curve_deviation_rel.unwrap() <= 1e-8, "{case}: {m:#?}");
+    assert!(
+        m.corner_distance.unwrap() <= m.junction_tolerance,
+        "{case}: {m:#?}"
+    );
+    eprintln!("{case}: {}", m.junction_summary());
     // the wall moved by a visible amount
     let moved = ev
         .grid

@@ -444,3 +444,279 @@ impl GeomDb {
         out
     }
 }
+
+// ------------------------------------------------------------------- junction accuracy
+
+/// Options of the junction accuracy measure ([`GeomDb::junction_accuracy`],
+/// [`curve_surfaces_distance`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+pub struct AccuracyOptions {
+    /// Fewest samples per arc (default 200).
+    pub min_samples_per_arc: usize,
+    /// Largest turning of the curve's tangent between two samples, radians (default 0.5°):
+    /// an arc that turns more gets more samples, up to `max_samples_per_arc`.
+    pub max_turn: f64,
+    /// Most samples per arc (default 4000).
+    pub max_samples_per_arc: usize,
+    /// A sample whose local foot (continued from the previous sample) is farther than
+    /// `recheck_rel × length scale`, did not converge or is held on the domain boundary is
+    /// re-projected by the global search of [`SurfaceInverter`] (default 1e-10).
+    pub recheck_rel: f64,
+}
+
+impl Default for AccuracyOptions {
+    fn default() -> Self {
+        Self {
+            min_samples_per_arc: 200,
+            max_turn: 0.5f64.to_radians(),
+            max_samples_per_arc: 4000,
+            recheck_rel: 1e-10,
+        }
+    }
+}
+
+/// The distance of a curve's samples to one surface.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+pub struct SurfaceDistance {
+    /// Largest distance (model units).
+    pub max: f64,
+    /// Root mean square of the distances over the samples.
+    pub rms: f64,
+    /// Global curve parameter of the sample with the largest distance.
+    pub at_t: f64,
+    /// That sample's point.
+    pub at_point: [f64; 3],
+}
+
+/// The sampled distance of a curve to its two defining surfaces.
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+pub struct CurveSurfacesDistance {
+    /// Number of samples (all arcs).
+    pub samples: usize,
+    /// To surface 1 and to surface 2.
+    pub surfaces: [SurfaceDistance; 2],
+    /// Per arc, the largest distance to either surface (where a re-fit is needed).
+    pub arc_max: Vec<f64>,
+}
+
+impl CurveSurfacesDistance {
+    /// The larger of the two maxima.
+    pub fn max(&self) -> f64 {
+        self.surfaces[0].max.max(self.surfaces[1].max)
+    }
+}
+
+/// The accuracy of one junction (a support curve with two defining surfaces) of a database.
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+pub struct JunctionAccuracy {
+    /// The curve.
+    pub curve: CurveId,
+    /// Its label (`curve N (name)`).
+    pub label: String,
+    /// Its two defining surfaces.
+    pub surfaces: [SurfaceId; 2],
+    /// The sampled distances.
+    pub distance: CurveSurfacesDistance,
+    /// The larger maximum as a fraction of the model's reference length.
+    pub max_rel: f64,
+}
+
+impl JunctionAccuracy {
+    /// The larger of the two maxima (model units).
+    pub fn max(&self) -> f64 {
+        self.distance.max()
+    }
+}
+
+/// Sample parameters of one arc [a, b] of `curve`: at least `min_samples_per_arc` uniform
+/// intervals, more when the tangent turns by more than `max_turn` per interval (the turning
+/// ∫|r′ × r″| / |r′|² dt estimated on 64 intervals). Includes a, excludes b.
+fn arc_samples<C: ParamCurve + ?Sized>(curve: &C, a: f64, b: f64, o: &AccuracyOptions) -> Vec<f64> {
+    const PRE: usize = 64;
+    let h = (b - a) / PRE as f64;
+    let turn: f64 = (0..PRE)
+        .map(|k| {
+            let d = curve.derivs(a + (k as f64 + 0.5) * h);
+            let n2 = d.d1.norm_squared();
+            if n2 > 0.0 {
+                d.d1.cross(&d.d2).norm() / n2 * h
+            } else {
+                0.0
+            }
+        })
+        .sum();
+    let by_turn = if o.max_turn > 0.0 && turn.is_finite() {
+        (turn / o.max_turn).ceil() as usize
+    } else {
+        0
+    };
+    let n = by_turn
+        .max(o.min_samples_per_arc)
+        .min(o.max_samples_per_arc.max(o.min_samples_per_arc))
+        .max(1);
+    (0..n).map(|j| a + (b - a) * j as f64 / n as f64).collect()
+}
+
+/// The distance of `curve` to the surfaces of `inv` (two point inversions) at samples of
+/// every arc (≥ `min_samples_per_arc`, more where the curve turns, see [`AccuracyOptions`])
+/// plus the curve's end.
+///
+/// Each distance is that of a true foot of the normal (Eq. 11, [`crate::invert`]): a local
+/// Newton continued from the previous sample's parameters, and the global search of
+/// [`SurfaceInverter::nearest_indexed`] at the first sample of each arc and wherever the local
+/// foot is not converged, is held on the domain boundary or is farther than the recheck
+/// distance; the nearer of the two is kept. A distance is therefore never under-estimated by
+/// a wrong local minimum above the recheck distance. Arcs are measured in parallel, each
+/// sequentially, so the result does not depend on the number of threads.
+pub fn curve_surfaces_distance<C, S1, S2>(
+    curve: &C,
+    inv: (&SurfaceInverter<'_, S1>, &SurfaceInverter<'_, S2>),
+    opts: &AccuracyOptions,
+) -> crate::Result<CurveSurfacesDistance>
+where
+    C: ParamCurve + ?Sized,
+    S1: crate::eval::ParamSurface + ?Sized,
+    S2: crate::eval::ParamSurface + ?Sized,
+{
+    let (lo, hi) = curve.domain();
+    let mut edges = vec![lo];
+    let mut b: Vec<f64> = curve
+        .breaks()
+        .into_iter()
+        .filter(|x| *x > lo && *x < hi)
+        .collect();
+    b.sort_by(f64::total_cmp);
+    b.dedup();
+    edges.extend(b);
+    edges.push(hi);
+    let recheck = opts.recheck_rel * inv.0.options().length_scale;
+    let arcs: Vec<(f64, f64, bool)> = edges
+        .windows(2)
+        .enumerate()
+        .map(|(k, w)| (w[0], w[1], k + 2 == edges.len()))
+        .collect();
+    // per arc: samples (t, point, d1, d2)
+    let per_arc = crate::par_map(&arcs, |&(a, b, last)| {
+        let mut ts = arc_samples(curve, a, b, opts);
+        if last {
+            ts.push(b);
+        }
+        let mut uv: [Option<[f64; 2]>; 2] = [None, None];
+        let mut out = Vec::with_capacity(ts.len());
+        for (i, &t) in ts.iter().enumerate() {
+            let p = curve.point(t);
+            let d1 = nearest(inv.0, &p, &mut uv[0], recheck, i)?;
+            let d2 = nearest(inv.1, &p, &mut uv[1], recheck, i)?;
+            out.push((t, p, d1, d2));
+        }
+        Ok::<_, crate::Error>(out)
+    });
+    let mut res = CurveSurfacesDistance {
+        samples: 0,
+        surfaces: [SurfaceDistance {
+            max: 0.0,
+            rms: 0.0,
+            at_t: lo,
+            at_point: {
+                let p = curve.point(lo);
+                [p.x, p.y, p.z]
+            },
+        }; 2],
+        arc_max: Vec::with_capacity(arcs.len()),
+    };
+    let mut sum = [0.0; 2];
+    for arc in per_arc {
+        let mut m: f64 = 0.0;
+        for (t, p, d1, d2) in arc? {
+            for (k, d) in [d1, d2].into_iter().enumerate() {
+                let s = &mut res.surfaces[k];
+                if d > s.max || d.is_nan() {
+                    s.max = d;
+                    s.at_t = t;
+                    s.at_point = [p.x, p.y, p.z];
+                }
+                sum[k] += d * d;
+            }
+            m = m.max(d1).max(d2);
+            res.samples += 1;
+        }
+        res.arc_max.push(m);
+    }
+    for k in 0..2 {
+        res.surfaces[k].rms = (sum[k] / res.samples.max(1) as f64).sqrt();
+    }
+    Ok(res)
+}
+
+/// The distance from `p` to the surface of `inv`: the local foot from `uv` (the previous
+/// sample's), re-checked by the global search when it is not trusted; `uv` is updated.
+fn nearest<S: crate::eval::ParamSurface + ?Sized>(
+    inv: &SurfaceInverter<'_, S>,
+    p: &crate::prelude::Point3,
+    uv: &mut Option<[f64; 2]>,
+    recheck: f64,
+    index: usize,
+) -> crate::Result<f64> {
+    let local = uv.map(|x| inv.foot_from(p, x));
+    let trusted = local.filter(|f| f.report.converged && !f.on_boundary && f.distance <= recheck);
+    let best = match (trusted, local) {
+        (Some(f), _) => f,
+        (None, Some(l)) => {
+            let g = inv.nearest_indexed(p, index)?;
+            if l.distance.is_finite() && l.distance < g.distance {
+                l
+            } else {
+                g
+            }
+        }
+        (None, None) => inv.nearest_indexed(p, index)?,
+    };
+    *uv = Some(best.uv);
+    Ok(best.distance)
+}
+
+impl GeomDb {
+    /// The accuracy of junction `c` (a support curve with two defining surfaces): its sampled
+    /// distance to both surfaces ([`curve_surfaces_distance`]). `None` when the curve has not
+    /// two defining surfaces or no arc.
+    pub fn junction_accuracy(
+        &self,
+        c: CurveId,
+        opts: &AccuracyOptions,
+    ) -> crate::Result<Option<JunctionAccuracy>> {
+        let curve = &self.curves[c.index()];
+        if curve.defining_surfaces.len() != 2 || curve.arcs.is_empty() {
+            return Ok(None);
+        }
+        let s = [curve.defining_surfaces[0], curve.defining_surfaces[1]];
+        let io = InvertOptions::for_model(self);
+        let (a, b) = (self.inverter(s[0], &io)?, self.inverter(s[1], &io)?);
+        let distance = curve_surfaces_distance(curve, (&a, &b), opts)?;
+        let label = if curve.name.is_empty() {
+            c.to_string()
+        } else {
+            format!("{c} ({})", curve.name)
+        };
+        Ok(Some(JunctionAccuracy {
+            curve: c,
+            label,
+            surfaces: s,
+            max_rel: distance.max() / self.reference_length(),
+            distance,
+        }))
+    }
+
+    /// [`junction_accuracy`](Self::junction_accuracy) of every junction, in curve order.
+    pub fn junctions_accuracy(
+        &self,
+        opts: &AccuracyOptions,
+    ) -> crate::Result<Vec<JunctionAccuracy>> {
+        let mut out = Vec::new();
+        for i in 0..self.curves.len() {
+            if let Some(j) = self.junction_accuracy(CurveId::from_index(i), opts)? {
+                out.push(j);
+            }
+        }
+        Ok(out)
+    }
+}

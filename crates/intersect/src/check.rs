@@ -4,13 +4,14 @@
 //! polynomials, so between control points the curve deviates from the true intersection by
 //! the interpolation error. [`curve_surface_deviation`] samples the curve uniformly in each
 //! arc and measures the distance of every sample to each defining surface (the foot of the
-//! normal, Eq. 11). This is the real accuracy of an updated curve and the per-curve
-//! intersection residual printed by `aeroshape geom check`.
+//! normal, Eq. 11, seeded by this crate's bounding-volume hierarchy). The model update and
+//! `aeroshape geom check` use geom-db's measure of the same quantity
+//! ([`geom_db::check::curve_surfaces_distance`]: ≥ 200 samples per arc, more where the curve
+//! turns, continuation with a global re-check); this one serves tests on analytic shapes.
 
 use crate::error::{Error, Result};
-use crate::project::{ProjectOptions, SurfaceProjector};
+use crate::project::SurfaceProjector;
 use geom_db::eval::{ParamCurve, ParamSurface};
-use geom_db::{CurveId, GeomDb, SurfaceId};
 use rayon::prelude::*;
 
 /// Distance of a curve from its two defining surfaces at sample points.
@@ -111,47 +112,4 @@ where
     }
     rep.rms = (sum / ts.len() as f64).sqrt();
     Ok(rep)
-}
-
-/// The intersection residual of one support curve with two defining surfaces.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct CurveResidual {
-    /// The curve.
-    pub curve: CurveId,
-    /// Its name (may be empty).
-    pub name: String,
-    /// Its two defining surfaces.
-    pub surfaces: [SurfaceId; 2],
-    /// Distances at the samples.
-    pub deviation: DeviationReport,
-    /// The larger maximum distance as a fraction of the model size.
-    pub max_rel: f64,
-}
-
-/// Intersection residuals of every support curve of `db` that has two defining surfaces:
-/// the distance of the curve from each surface at `per_arc` samples per arc (the check of
-/// `aeroshape geom check`). Curves are checked in order; the samples of each in parallel.
-pub fn model_intersection_residuals(db: &GeomDb, per_arc: usize) -> Result<Vec<CurveResidual>> {
-    let scale = db.reference_length();
-    let po = ProjectOptions::default().with_length_scale(scale);
-    let mut out = Vec::new();
-    for (ci, c) in db.curves.iter().enumerate() {
-        if c.defining_surfaces.len() != 2 || c.arcs.is_empty() {
-            continue;
-        }
-        let id = CurveId::from_index(ci);
-        let [a, b] = [c.defining_surfaces[0], c.defining_surfaces[1]];
-        let label = crate::update::curve_label(db, id);
-        let pa = SurfaceProjector::new(a.to_string(), &db.surfaces[a.index()], &po)?;
-        let pb = SurfaceProjector::new(b.to_string(), &db.surfaces[b.index()], &po)?;
-        let d = curve_surface_deviation(&label, c, &pa, &pb, per_arc)?;
-        out.push(CurveResidual {
-            curve: id,
-            name: c.name.clone(),
-            surfaces: [a, b],
-            max_rel: d.max() / scale,
-            deviation: d,
-        });
-    }
-    Ok(out)
 }

@@ -176,6 +176,43 @@ pub enum Error {
         /// Tolerance.
         tol: f64,
     },
+
+    /// A re-intersected junction is farther from one of its defining surfaces than the
+    /// junction tolerance at one of its samples, after the adaptive re-fit.
+    #[error(
+        "{curve}: the junction is {distance:e} away from {surface} at t = {at_t} \
+         (tolerance {tol:e}, {samples} samples, after {refits} re-fits)"
+    )]
+    JunctionOffSurface {
+        /// The junction (support curve).
+        curve: String,
+        /// The defining surface it is off.
+        surface: String,
+        /// Largest sampled distance to that surface.
+        distance: f64,
+        /// Curve parameter of that sample.
+        at_t: f64,
+        /// Tolerance.
+        tol: f64,
+        /// Samples measured.
+        samples: usize,
+        /// Re-fit rounds done.
+        refits: usize,
+    },
+
+    /// An updated corner is farther than the junction tolerance from a curve or surface that
+    /// defines it (a curve ending there, or a defining or bounded surface of such a curve).
+    #[error("{corner}: the corner is {distance:e} away from {entity} (tolerance {tol:e})")]
+    CornerOffEntity {
+        /// The corner.
+        corner: String,
+        /// The curve or surface.
+        entity: String,
+        /// Distance (foot of the normal).
+        distance: f64,
+        /// Tolerance.
+        tol: f64,
+    },
 }
 
 /// `Result` with [`Error`] as the default error type.

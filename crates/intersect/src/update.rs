@@ -31,12 +31,13 @@
 //! maps independent items and collects in order. Zero control-node change returns the
 //! initial model bit for bit (nothing is marked changed, so nothing is recomputed).
 
-use crate::check::curve_surface_deviation;
 use crate::corner::{CornerOptions, solve_corner};
 use crate::error::{Error, Result};
 use crate::project::{ProjectOptions, SurfaceProjector};
 use crate::ssi::{IntersectionSeeds, SsiOptions, update_curve_points};
+use geom_db::check::{AccuracyOptions, CurveSurfacesDistance, curve_surfaces_distance};
 use geom_db::eval::ParamCurve;
+use geom_db::invert::{InvertOptions, SurfaceInverter};
 use geom_db::prelude::{Point3, Vector3};
 use geom_db::{Arc, CornerId, CurveId, GeomDb, SurfaceId};
 
@@ -54,9 +55,23 @@ pub struct UpdateOptions {
     pub meet_rel_tol: f64,
     /// How far (in arcs) corner parameters may run past a curve's ends (default 0.5).
     pub corner_extension: f64,
-    /// Samples per arc at which updated curves are checked against both surfaces
-    /// (0: no check; default 0). The check is the real accuracy between control points.
-    pub deviation_samples_per_arc: usize,
+    /// Largest sampled distance of a re-intersected junction (and of an updated corner) to
+    /// each surface and curve that defines it, relative to the model size (default 1e-8).
+    /// Above it the junction is re-fitted, and an error if the re-fit does not bring it
+    /// within.
+    pub junction_rel_tol: f64,
+    /// How junctions are sampled (≥ 200 samples per arc by default, more where the curve
+    /// turns; [`AccuracyOptions`]).
+    pub accuracy: AccuracyOptions,
+    /// Re-fit rounds at most (default 3); each raises the degree of the arcs above the
+    /// tolerance (see [`refit_degree`]).
+    pub max_refits: usize,
+    /// Highest arc degree a re-fit may reach (default 10). The arcs are power-basis
+    /// polynomials solved from control points at Chebyshev–Lobatto nodes (A = V⁻¹R): the
+    /// round-off of that solve, measured on a smooth arc of size ~4, is 3e-11 at degree 8,
+    /// 7e-10 at 10, 2e-8 at 12 and 8e-6 at 16, so a higher degree adds error instead of
+    /// removing it.
+    pub max_refit_degree: usize,
 }
 
 impl Default for UpdateOptions {
@@ -66,15 +81,29 @@ impl Default for UpdateOptions {
             max_initial_gap_rel: 1e-6,
             meet_rel_tol: 1e-7,
             corner_extension: 0.5,
-            deviation_samples_per_arc: 0,
+            junction_rel_tol: 1e-8,
+            accuracy: AccuracyOptions::default(),
+            max_refits: 3,
+            max_refit_degree: 10,
         }
     }
 }
 
 impl UpdateOptions {
-    /// Measures updated curves against their surfaces at `n` samples per arc.
+    /// Measures updated junctions against their surfaces at at least `n` samples per arc
+    /// (the default is 200; the measure always runs).
     pub fn with_deviation_samples(mut self, n: usize) -> Self {
-        self.deviation_samples_per_arc = n;
+        self.accuracy.min_samples_per_arc = n.max(1);
+        self
+    }
+    /// Sets the junction tolerance relative to the model size.
+    pub fn with_junction_rel_tol(mut self, t: f64) -> Self {
+        self.junction_rel_tol = t;
+        self
+    }
+    /// Sets the number of re-fit rounds (0: measure only).
+    pub fn with_max_refits(mut self, n: usize) -> Self {
+        self.max_refits = n;
         self
     }
     /// Sets the allowed initial gap (relative).
@@ -102,10 +131,28 @@ pub struct CurveReport {
     pub max_move: f64,
     /// Control points solved by the normal-plane fallback.
     pub fallbacks: usize,
-    /// Largest distance from surface 1 and 2 at the check samples (when requested).
+    /// Largest distance from surface 1 and 2 at the samples (re-intersected junctions).
     pub deviation: Option<[f64; 2]>,
     /// Curve parameters where those largest distances occur.
     pub deviation_at: Option<[f64; 2]>,
+    /// The sampled distance to both surfaces in full (max, RMS, where; per arc), after the
+    /// re-fit (re-intersected junctions).
+    pub accuracy: Option<CurveSurfacesDistance>,
+    /// The largest sampled distance before the re-fit (re-intersected junctions).
+    pub deviation_before_refit: Option<f64>,
+    /// Re-fit rounds done.
+    pub refits: usize,
+    /// The arc degrees of the updated curve (raised by a re-fit).
+    pub degrees: Vec<usize>,
+}
+
+/// The distance of an updated corner to one entity that defines it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct EntityDistance {
+    /// The curve or surface label.
+    pub entity: String,
+    /// Distance (foot of the normal).
+    pub distance: f64,
 }
 
 /// What happened to one corner.
@@ -123,6 +170,9 @@ pub struct CornerReport {
     pub residual: f64,
     /// How far the corner moved.
     pub moved: f64,
+    /// Its distance to every curve ending there and to every defining or bounded surface of
+    /// those curves (updated corners).
+    pub distances: Vec<EntityDistance>,
 }
 
 /// The report of a model update.
@@ -138,8 +188,15 @@ pub struct UpdateReport {
     pub max_curve_residual: f64,
     /// Largest corner residual distance.
     pub max_corner_residual: f64,
-    /// Largest deviation of an updated curve from its surfaces at the check samples.
+    /// Largest sampled distance of a re-intersected junction from its surfaces (None: no
+    /// junction was re-intersected).
     pub max_deviation: Option<f64>,
+    /// Largest distance of an updated corner to a curve or surface defining it.
+    pub max_corner_distance: Option<f64>,
+    /// The junction tolerance (model units): `junction_rel_tol × length_scale`.
+    pub junction_tolerance: f64,
+    /// Re-fit rounds over all junctions.
+    pub refits: usize,
     /// The length scale (model size) of the tolerances.
     pub length_scale: f64,
 }
@@ -311,6 +368,10 @@ impl ModelBaseline {
                 fallbacks: 0,
                 deviation: None,
                 deviation_at: None,
+                accuracy: None,
+                deviation_before_refit: None,
+                refits: 0,
+                degrees: Vec::new(),
             };
             match &self.seeds[ci] {
                 Some(cs)
@@ -373,6 +434,7 @@ impl ModelBaseline {
                 iterations: 0,
                 residual: 0.0,
                 moved: 0.0,
+                distances: Vec::new(),
             };
             let mut distinct: Vec<(CurveId, f64)> = Vec::new();
             for &(_, _, c, t) in list {
@@ -445,6 +507,73 @@ impl ModelBaseline {
                 db.curves[ci].arcs = arcs_from_chain(&degrees, ch);
             }
         }
+        // 3b. sampled accuracy of the re-intersected junctions, re-fitted where above
+        // tolerance (before the component ends, which are feet on the final curves)
+        let jtol = opts.junction_rel_tol * self.scale;
+        let io = InvertOptions::new(self.scale);
+        let mut max_dev: Option<f64> = None;
+        let mut refits_total = 0;
+        for ci in 0..nc {
+            let Some(cs) = &self.seeds[ci] else { continue };
+            if !reports[ci].reintersected {
+                continue;
+            }
+            let (a, b) = (cs.surfaces[0], cs.surfaces[1]);
+            let (s1, s2) = (&db.surfaces[a.index()], &db.surfaces[b.index()]);
+            let ia = SurfaceInverter::new(surface_label(init, a), s1, &io)?;
+            let ib = SurfaceInverter::new(surface_label(init, b), s2, &io)?;
+            let label = &reports[ci].label.clone();
+            let curve = &mut db.curves[ci];
+            let mut dist = curve_surfaces_distance(&*curve, (&ia, &ib), &opts.accuracy)?;
+            reports[ci].deviation_before_refit = Some(dist.max());
+            let mut refits = 0;
+            while dist.max() > jtol && refits < opts.max_refits {
+                let degrees: Vec<usize> = curve
+                    .arcs
+                    .iter()
+                    .zip(&dist.arc_max)
+                    .map(|(arc, m)| {
+                        if *m > jtol {
+                            refit_degree(arc.degree, opts.max_refit_degree)
+                        } else {
+                            arc.degree
+                        }
+                    })
+                    .collect();
+                if degrees.iter().zip(&curve.arcs).all(|(n, a)| *n == a.degree) {
+                    break; // every arc above tolerance is at the highest degree
+                }
+                curve.arcs = refit_arcs(label, &curve.arcs, &degrees, s1, s2, &so)?;
+                refits += 1;
+                dist = curve_surfaces_distance(&*curve, (&ia, &ib), &opts.accuracy)?;
+            }
+            if dist.max() > jtol || dist.max().is_nan() {
+                let k = usize::from(dist.surfaces[1].max > dist.surfaces[0].max);
+                let sid = cs.surfaces[k];
+                return Err(Error::JunctionOffSurface {
+                    curve: label.clone(),
+                    surface: surface_label(init, sid),
+                    distance: dist.surfaces[k].max,
+                    at_t: dist.surfaces[k].at_t,
+                    tol: jtol,
+                    samples: dist.samples,
+                    refits,
+                });
+            }
+            if refits > 0 {
+                renumber_control(&mut db, ci);
+            }
+            let r = &mut reports[ci];
+            r.deviation = Some([dist.surfaces[0].max, dist.surfaces[1].max]);
+            r.deviation_at = Some([dist.surfaces[0].at_t, dist.surfaces[1].at_t]);
+            r.refits = refits;
+            max_dev = Some(max_dev.unwrap_or(0.0f64).max(dist.max()));
+            r.accuracy = Some(dist);
+            refits_total += refits;
+        }
+        for (r, c) in reports.iter_mut().zip(&db.curves) {
+            r.degrees = c.arcs.iter().map(|a| a.degree).collect();
+        }
         // component end parameters from the final curves
         for &(comp, is_end, kid, p, t) in &comp_ends {
             let c = init.curve_components[comp].curve;
@@ -471,6 +600,8 @@ impl ModelBaseline {
                 cc.t0 = tn;
             }
         }
+        // 3c. each updated corner against the curves and surfaces that define it
+        let max_corner = self.corner_distances(&db, &mut corner_reports, &io, jtol)?;
         // 4. control nodes used only by intersection curves follow the new control points
         let mut acc: Vec<(Vector3, usize)> = vec![(Vector3::zeros(), 0); db.control_nodes.len()];
         for ci in 0..nc {
@@ -480,7 +611,7 @@ impl ModelBaseline {
             let c = &db.curves[ci];
             for (ids, arc) in c.control.nodes.iter().zip(&c.arcs) {
                 for (id, p) in ids.iter().zip(arc.control_points()) {
-                    if !self.surface_node[id.index()] {
+                    if !self.surface_node.get(id.index()).copied().unwrap_or(false) {
                         acc[id.index()].0 += p.coords;
                         acc[id.index()].1 += 1;
                     }
@@ -494,32 +625,6 @@ impl ModelBaseline {
             }
         }
         db.control_nodes = moved_nodes;
-        // deviation between control points
-        let mut max_dev = None;
-        if opts.deviation_samples_per_arc > 0 {
-            let po = ProjectOptions::default().with_length_scale(self.scale);
-            for ci in 0..nc {
-                let Some(cs) = &self.seeds[ci] else { continue };
-                if !reports[ci].reintersected {
-                    continue;
-                }
-                let (a, b) = (cs.surfaces[0], cs.surfaces[1]);
-                let pa =
-                    SurfaceProjector::new(surface_label(init, a), &db.surfaces[a.index()], &po)?;
-                let pb =
-                    SurfaceProjector::new(surface_label(init, b), &db.surfaces[b.index()], &po)?;
-                let d = curve_surface_deviation(
-                    &reports[ci].label,
-                    &db.curves[ci],
-                    &pa,
-                    &pb,
-                    opts.deviation_samples_per_arc,
-                )?;
-                reports[ci].deviation = Some(d.max_distance);
-                reports[ci].deviation_at = Some(d.at_t);
-                max_dev = Some(max_dev.unwrap_or(0.0f64).max(d.max()));
-            }
-        }
         db.validate()?;
         let report = UpdateReport {
             surfaces_changed: surf_changed
@@ -536,9 +641,197 @@ impl ModelBaseline {
             curves: reports,
             corners: corner_reports,
             max_deviation: max_dev,
+            max_corner_distance: max_corner,
+            junction_tolerance: jtol,
+            refits: refits_total,
             length_scale: self.scale,
         };
         Ok((db, report))
+    }
+}
+
+/// The degree a re-fit gives an arc of degree `n` that is above the junction tolerance:
+/// n + max(2, n/2), at most `cap` (Chebyshev–Lobatto interpolation of the smooth
+/// intersection converges geometrically with the degree, so raising it where the error is
+/// large is the adaptive refinement that keeps the curve's global parameter, hence the
+/// grid's frozen parameters on the curve, unchanged).
+pub fn refit_degree(n: usize, cap: usize) -> usize {
+    (n + (n / 2).max(2))
+        .min(cap.min(geom_db::control::MAX_DEGREE))
+        .max(n)
+}
+
+/// Re-fits a junction's arcs at new `degrees`: the new control points of the raised arcs
+/// are the updated curve's points at the nodes of the new degree, seeded on the (updated)
+/// surfaces by Eq. (11) and re-intersected by Eq. (12); arcs whose degree did not change
+/// keep their control points, and so do the curve's ends (corners).
+fn refit_arcs<S: geom_db::eval::ParamSurface + ?Sized>(
+    label: &str,
+    arcs: &[Arc],
+    degrees: &[usize],
+    s1: &S,
+    s2: &S,
+    so: &SsiOptions,
+) -> Result<Vec<Arc>> {
+    let mut pts = Vec::new();
+    let mut tan = Vec::new();
+    let mut raised = Vec::new();
+    for (k, (arc, &n)) in arcs.iter().zip(degrees).enumerate() {
+        for (i, &x) in geom_db::control::nodes(n).iter().enumerate() {
+            if k > 0 && i == 0 {
+                continue;
+            }
+            let d = arc.derivs(x);
+            pts.push(d.point);
+            tan.push(d.d1);
+            raised.push(n != arc.degree && i > 0 && i < n);
+        }
+    }
+    let po = so.project.clone();
+    let pa = SurfaceProjector::new(format!("{label}: surface 1"), s1, &po)?;
+    let pb = SurfaceProjector::new(format!("{label}: surface 2"), s2, &po)?;
+    // the updated curve is off its surfaces by the error being corrected: the seeds are
+    // only Newton starts, so the initial-gap check is loosened
+    let seed_opts = SsiOptions {
+        max_initial_gap_rel: 1e-3,
+        ..so.clone()
+    };
+    let seeds =
+        IntersectionSeeds::new(label, &pts, Some(&tan), Some(degrees), &pa, &pb, &seed_opts)?;
+    let up = update_curve_points(&seeds, s1, s2, so)?;
+    let new: Vec<Point3> = up
+        .new_points()
+        .into_iter()
+        .zip(&pts)
+        .zip(&raised)
+        .map(|((n, o), r)| if *r { n } else { *o })
+        .collect();
+    Ok(arcs_from_chain(degrees, &new))
+}
+
+/// Gives the arcs of curve `ci` whose degree a re-fit raised as many control nodes as they
+/// need: the arc's end nodes and old interior nodes are kept, new nodes appended at the
+/// arc's control points (step 4 then sets every node of the curve).
+fn renumber_control(db: &mut GeomDb, ci: usize) {
+    let arcs = db.curves[ci].arcs.clone();
+    let mut nodes = db.curves[ci].control.nodes.clone();
+    if nodes.len() != arcs.len() {
+        return; // a curve without control nodes
+    }
+    for (ids, arc) in nodes.iter_mut().zip(&arcs) {
+        let want = arc.degree + 1;
+        if ids.len() == want || ids.len() < 2 {
+            continue;
+        }
+        let pts = arc.control_points();
+        let (first, last) = (ids[0], ids[ids.len() - 1]);
+        let mut interior: Vec<geom_db::ControlNodeId> = ids[1..ids.len() - 1].to_vec();
+        interior.truncate(want - 2);
+        while interior.len() < want - 2 {
+            let k = interior.len() + 1;
+            interior.push(geom_db::ControlNodeId::from_index(db.control_nodes.len()));
+            db.control_nodes.push(pts[k]);
+        }
+        let mut v = vec![first];
+        v.extend(interior);
+        v.push(last);
+        *ids = v;
+    }
+    db.curves[ci].control.nodes = nodes;
+}
+
+impl ModelBaseline {
+    /// The distance of each updated corner to every curve ending there (foot of the normal
+    /// on the final curve from the component's end parameter) and to every defining surface
+    /// of those curves and support surface of a surface component they bound (global foot);
+    /// recorded in the corner reports. An entity farther than `tol` is
+    /// [`Error::CornerOffEntity`]. Returns the largest distance (None: no corner updated).
+    fn corner_distances(
+        &self,
+        db: &GeomDb,
+        reports: &mut [CornerReport],
+        io: &InvertOptions,
+        tol: f64,
+    ) -> Result<Option<f64>> {
+        let init = &self.db;
+        // curve component → support surfaces of the surface components it bounds
+        let mut bounded: Vec<Vec<SurfaceId>> = vec![Vec::new(); init.curve_components.len()];
+        for sc in &init.surface_components {
+            for oc in sc.loops.iter().flatten() {
+                let v = &mut bounded[oc.comp.index()];
+                if !v.contains(&sc.surface) {
+                    v.push(sc.surface);
+                }
+            }
+        }
+        let mut inverters: Vec<Option<SurfaceInverter<'_, geom_db::SupportSurface>>> =
+            (0..db.surfaces.len()).map(|_| None).collect();
+        let mut max: Option<f64> = None;
+        for (ki, rep) in reports.iter_mut().enumerate() {
+            if !rep.updated {
+                continue;
+            }
+            let kid = CornerId::from_index(ki);
+            let p = db.corners[ki].point;
+            let mut curves: Vec<(CurveId, f64)> = Vec::new();
+            let mut surfaces: Vec<SurfaceId> = Vec::new();
+            for (k, cc) in db.curve_components.iter().enumerate() {
+                for (end, t) in [(cc.start, cc.t0), (cc.end, cc.t1)] {
+                    if end != kid {
+                        continue;
+                    }
+                    if !curves.iter().any(|c| c.0 == cc.curve) {
+                        curves.push((cc.curve, t));
+                    }
+                    let def = &db.curves[cc.curve.index()].defining_surfaces;
+                    for s in def.iter().chain(&bounded[k]) {
+                        if !surfaces.contains(s) {
+                            surfaces.push(*s);
+                        }
+                    }
+                }
+            }
+            let mut out = Vec::new();
+            for (c, t) in curves {
+                let curve = &db.curves[c.index()];
+                let n = curve.arcs.len() as f64;
+                let o = geom_db::invert::foot_on_curve(curve, &p, t, 0.0, n, io.settings());
+                let d = (curve.point(o.x[0]) - p)
+                    .norm()
+                    .min((curve.point(t) - p).norm());
+                out.push(EntityDistance {
+                    entity: curve_label(init, c),
+                    distance: d,
+                });
+            }
+            for s in surfaces {
+                let inv = match &mut inverters[s.index()] {
+                    Some(i) => i,
+                    slot => slot.insert(SurfaceInverter::new(
+                        surface_label(init, s),
+                        &db.surfaces[s.index()],
+                        io,
+                    )?),
+                };
+                out.push(EntityDistance {
+                    entity: surface_label(init, s),
+                    distance: inv.nearest_indexed(&p, ki)?.distance,
+                });
+            }
+            for e in &out {
+                if e.distance > tol || e.distance.is_nan() {
+                    return Err(Error::CornerOffEntity {
+                        corner: corner_label(init, kid),
+                        entity: e.entity.clone(),
+                        distance: e.distance,
+                        tol,
+                    });
+                }
+                max = Some(max.unwrap_or(0.0f64).max(e.distance));
+            }
+            rep.distances = out;
+        }
+        Ok(max)
     }
 }
 

@@ -1,5 +1,6 @@
 //! Integration tests of `intersect`'s public API on analytic shapes with exact answers.
 
+mod accuracy;
 mod corner;
 mod fixture;
 mod model;
