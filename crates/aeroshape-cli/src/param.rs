@@ -200,6 +200,12 @@ fn list(a: ListArgs) -> anyhow::Result<()> {
 }
 
 fn apply(a: ApplyArgs) -> anyhow::Result<()> {
+    if !(a.junction_tol.is_finite() && a.junction_tol > 0.0) {
+        bail!(
+            "--junction-tol must be a positive number, got {}",
+            a.junction_tol
+        );
+    }
     let mut inputs: Vec<&Path> = vec![&a.case];
     if let Some(dv) = &a.dv {
         inputs.push(dv);
@@ -213,12 +219,6 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
     }
     if let Some(r) = &a.report {
         ensure_not_input(r, &inputs).map_err(anyhow::Error::msg)?;
-    }
-    if !(a.junction_tol.is_finite() && a.junction_tol > 0.0) {
-        bail!(
-            "--junction-tol must be a positive number, got {}",
-            a.junction_tol
-        );
     }
     let reg = prep.registry();
     let x = match &a.dv {

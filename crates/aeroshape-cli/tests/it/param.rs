@@ -298,3 +298,75 @@ fn refuses_to_overwrite_an_input_and_reports_case_errors() {
         stderr(&o)
     );
 }
+
+#[test]
+fn apply_reports_the_sampled_junction_distance_and_fails_above_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.ron");
+    let rep = dir.path().join("report.json");
+    let o = bin()
+        .args(["param", "apply"])
+        .arg(case_path())
+        .arg("--dv")
+        .arg(dv_path())
+        .arg("-o")
+        .arg(&out)
+        .arg("--report")
+        .arg(&rep)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.contains("junctions: "), "{text}");
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
+    let m = &v["model"];
+    let tol = m["junction_tolerance"].as_f64().unwrap();
+    let js = m["junctions"].as_array().unwrap();
+    assert!(!js.is_empty(), "{m}");
+    for j in js {
+        let arcs = j["degrees"].as_array().unwrap().len() as u64;
+        assert!(j["samples"].as_u64().unwrap() >= 200 * arcs, "{j}");
+        for k in 0..2 {
+            assert!(j["max"][k].as_f64().unwrap() <= tol, "{j}");
+        }
+    }
+    assert!(m["curve_deviation_rel"].as_f64().unwrap() <= 1e-8);
+    assert!(v["update"]["curves"].is_array());
+    // a tolerance no representation meets: an error naming the curve and the distance
+    let o = bin()
+        .args(["param", "apply"])
+        .arg(case_path())
+        .arg("--dv")
+        .arg(dv_path())
+        .arg("-o")
+        .arg(dir.path().join("g2.ron"))
+        .args(["--junction-tol", "1e-13"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.contains("junction is") && err.contains("away from surface"),
+        "{err}"
+    );
+    // the error names one of the junctions the report listed
+    assert!(
+        js.iter()
+            .any(|j| err.contains(j["curve"].as_str().unwrap())),
+        "{err}"
+    );
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(!dir.path().join("g2.ron").exists());
+    // a tolerance that is not a positive number is a usage mistake named by its flag
+    let o = bin()
+        .args(["param", "apply"])
+        .arg(case_path())
+        .arg("-o")
+        .arg(dir.path().join("g3.ron"))
+        .args(["--junction-tol", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--junction-tol"), "{}", stderr(&o));
+    assert!(!dir.path().join("g3.ron").exists());
+}
