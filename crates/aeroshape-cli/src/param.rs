@@ -276,7 +276,7 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
     }
     if let (Some(path), Some(j)) = (&a.jacobian, &jac) {
         let names = reg.names();
-        write_atomic(path, |w| j.write_json(&names, w))?;
+        write_atomic(path, |w| param::jacobian::write_json(j, &names, w))?;
     }
     let reint = report.curves.iter().filter(|c| c.reintersected).count();
     let corners = report.corners.iter().filter(|c| c.updated).count();
@@ -297,8 +297,8 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
         outln!(
             "wrote {} ({} × {}, {} non-zeros)",
             path.display(),
-            j.n_rows,
-            j.n_cols,
+            j.rows(),
+            j.cols(),
             j.nnz()
         );
     }

@@ -19,7 +19,7 @@
 //! * [`Prepared`]: a parametrisation bound to a geometry; positions and Jacobian for a
 //!   design vector. Composition rules are in [`prepare`].
 //! * [`constraints`]: A·x ≤ b with names, feasibility, dense/JSON export.
-//! * [`jacobian`]: the sparse (CSR) Jacobian.
+//! * [`jacobian`]: the sparse Jacobian, a [`sprs::CsMat`] (CSR).
 //!
 //! The equations, conventions and algorithms are in `docs/crates/param.md`.
 

@@ -351,7 +351,7 @@ impl Prepared {
     /// Positions and the exact Jacobian d(positions)/dx at `x`.
     pub fn apply_with_jacobian(&self, x: &[f64]) -> Result<(Vec<Point3>, Jacobian)> {
         let (p, rows) = self.run(x, true)?;
-        let j = Jacobian::from_node_rows(&rows.unwrap_or_default(), self.registry.len());
+        let j = crate::jacobian::from_node_rows(&rows.unwrap_or_default(), self.registry.len());
         Ok((p, j))
     }
 

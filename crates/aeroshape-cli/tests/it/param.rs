@@ -147,8 +147,8 @@ fn apply_writes_updated_geometry_and_jacobian() {
         .iter()
         .map(|x| x.as_f64().unwrap())
         .collect();
-    assert_eq!(vals.len(), j.values.len());
-    for (a, b) in vals.iter().zip(&j.values) {
+    assert_eq!(vals.len(), j.data().len());
+    for (a, b) in vals.iter().zip(j.data()) {
         // JSON text keeps ~17 significant digits
         assert!((a - b).abs() <= 1e-15 * b.abs(), "{a} vs {b}");
     }
@@ -162,7 +162,7 @@ fn fd_check(prep: &Prepared, x: &[f64], what: &str) {
         xp[l] += h;
         xm[l] -= h;
         let (pp, pm) = (prep.apply(&xp).unwrap(), prep.apply(&xm).unwrap());
-        let col = j.column(l);
+        let col = param::jacobian::column(&j, l);
         let (mut err, mut size) = (0.0f64, 0.0f64);
         for (k, (a, b)) in pp.iter().zip(&pm).enumerate() {
             for c in 0..3 {

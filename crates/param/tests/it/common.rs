@@ -212,7 +212,7 @@ pub fn check_jacobian(p: &Prepared, x: &[f64], rel: f64) {
         xp[l] += h;
         xm[l] -= h;
         let (pp, pm) = (p.apply(&xp).unwrap(), p.apply(&xm).unwrap());
-        let col = j.column(l);
+        let col = param::jacobian::column(&j, l);
         let mut scale: f64 = 0.0;
         let mut err: f64 = 0.0;
         for (k, (a, b)) in pp.iter().zip(&pm).enumerate() {
