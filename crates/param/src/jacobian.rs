@@ -68,7 +68,8 @@ pub fn write_json(j: &Jacobian, names: &[&str], mut w: impl Write) -> std::io::R
         col_idx: &'a [usize],
         values: &'a [f64],
     }
-    let row_ptr = j.indptr().to_proper();
+    let indptr = j.indptr();
+    let row_ptr = indptr.to_proper();
     serde_json::to_writer(
         &mut w,
         &Out {
