@@ -73,6 +73,10 @@ pub trait MasterSource: Send + Sync {
     /// The master discretisation at `x`.
     fn generate(&self, x: &[f64]) -> Result<MasterGrid, MasterError>;
     /// d(point k)/d(x_l) as `out[k][l]`, if the generator has it.
+    ///
+    /// This stays dense, unlike the user-facing [`Jacobian`](crate::Jacobian): a master has a
+    /// few thousand points and a handful of variables, and each variable (a spanwise law)
+    /// moves nearly every point, so a sparse matrix would store the same entries plus indices.
     fn jacobian(&self, x: &[f64]) -> Option<Result<Vec<Vec<Vector3>>, MasterError>> {
         let _ = x;
         None

@@ -539,7 +539,7 @@ fn control_node_jacobian_through_param() {
         xp[l] += h;
         xm[l] -= h;
         let (pp, pm) = (prep.apply(&xp).unwrap(), prep.apply(&xm).unwrap());
-        let col = j.column(l);
+        let col = param::jacobian::column(&j, l);
         let (mut err, mut size) = (0.0f64, 0.0f64);
         for (k, (a, b)) in pp.iter().zip(&pm).enumerate() {
             for c in 0..3 {
