@@ -50,13 +50,12 @@ pub fn variable_reach(prep: &Prepared) -> Result<Vec<VariableReach>, param::Erro
     let reg = prep.registry();
     let (_, jac) = prep.apply_with_jacobian(&generic_point(prep))?;
     let mut nodes: Vec<Vec<usize>> = vec![Vec::new(); reg.len()];
-    for row in 0..jac.n_rows {
-        for k in jac.row_ptr[row]..jac.row_ptr[row + 1] {
-            let list = &mut nodes[jac.col_idx[k]];
-            if list.last() != Some(&(row / 3)) {
-                list.push(row / 3);
-            }
-        }
+    for (_, (row, col)) in jac.iter() {
+        nodes[col].push(row / 3);
+    }
+    for list in &mut nodes {
+        list.sort_unstable();
+        list.dedup();
     }
     Ok(reg
         .variables()
