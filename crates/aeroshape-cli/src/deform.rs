@@ -218,20 +218,11 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let mut displacements = match &args.displacements {
+    let displacements = match &args.displacements {
         Some(p) => read_displacements(p, m.n_nodes())?,
         None => Vec::new(),
     };
-    // a node of a fixed marker (named by --fixed or by nothing) never moves, even where the
-    // marker meets a sliding one: a zero displacement takes precedence over sliding
-    let given: std::collections::HashSet<u32> = displacements.iter().map(|d| d.0).collect();
-    displacements.extend(
-        aeroshape::precedence::held_nodes(&m, &args.rigid, &args.slide)
-            .into_iter()
-            .filter(|v| !given.contains(v))
-            .map(|v| (v, [0.0; 3])),
-    );
-    let request = deform::Request {
+    let mut request = deform::Request {
         rigid: args.rigid.clone(),
         motion,
         displacements,
@@ -243,6 +234,9 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         rel_tol: args.tolerance,
         allow_inverted: args.allow_inverted,
     };
+    // a node of a fixed marker (named by --fixed or by nothing) never moves, even where the
+    // marker meets a sliding one
+    aeroshape::precedence::hold_fixed_nodes(&m, &mut request);
     let mut progress = |phase: &str, done: usize, total: usize| {
         if let Some(b) = &bar {
             b.set_message(format!("{phase} ({done}/{total} increments)"));

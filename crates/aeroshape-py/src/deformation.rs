@@ -200,7 +200,7 @@ pub fn deform_mesh(
         axis_dir: vec3(axis_dir, "axis_dir")?,
         translation: vec3(translate, "translate")?,
     };
-    let request = ::deform::Request {
+    let mut request = ::deform::Request {
         rigid,
         motion,
         displacements: match &displacements {
@@ -215,6 +215,8 @@ pub fn deform_mesh(
         rel_tol: tolerance,
         allow_inverted,
     };
+    // as `aeroshape deform`: a node of a fixed marker never moves where it meets a sliding one
+    aeroshape::precedence::hold_fixed_nodes(m, &mut request);
     let mut prog = Progress::new(py, "deform", progress)?;
     let result = py.detach(|| -> Result<_, (Kind, String)> {
         let geometry = match &geometry {

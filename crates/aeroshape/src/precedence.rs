@@ -40,3 +40,16 @@ pub fn held_nodes(grid: &Mesh, moving: &[String], slide: &[String]) -> Vec<u32> 
         .collect();
     sliding.intersection(&fixed).copied().collect()
 }
+
+/// Holds the nodes of [`held_nodes`] in `request` on `grid`: each gets a zero displacement,
+/// unless the request already prescribes one for it. What `aeroshape deform` and the Python
+/// package's `deform` do before they run a request, so that both give the same grid.
+pub fn hold_fixed_nodes(grid: &Mesh, request: &mut deform::Request) {
+    let given: BTreeSet<u32> = request.displacements.iter().map(|d| d.0).collect();
+    let held = held_nodes(grid, &request.rigid, &request.slide);
+    request.displacements.extend(
+        held.into_iter()
+            .filter(|v| !given.contains(v))
+            .map(|v| (v, [0.0; 3])),
+    );
+}
