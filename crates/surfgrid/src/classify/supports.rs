@@ -102,11 +102,17 @@ pub(super) fn supports(ctx: &Context<'_>, topo: &Topology) -> Result<Supports> {
                         t0 = t;
                     }
                 }
-                let f = pr.project_from(&p, t0);
-                let t = f.t.clamp(lo, hi);
-                let d = (curve.point(t) - p).norm();
-                if d < best.0 {
-                    best = (d, Some(NodeSupport::Curve { comp: cc, t }), cc.to_string());
+                // and the global foot on the whole support curve (a closed junction loop
+                // passes near itself at a sharp trailing edge, where the nearest of the
+                // samples can seed the wrong side), when it falls in the component's range
+                let local = pr.project_from(&p, t0).t;
+                let global = pr.project(&p).ok().map(|f| f.t);
+                for t in std::iter::once(local).chain(global) {
+                    let t = t.clamp(lo, hi);
+                    let d = (curve.point(t) - p).norm();
+                    if d < best.0 {
+                        best = (d, Some(NodeSupport::Curve { comp: cc, t }), cc.to_string());
+                    }
                 }
             }
         }
