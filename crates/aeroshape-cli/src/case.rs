@@ -2,29 +2,29 @@
 //! (`aeroshape::init`): markers by shape, the wall tied to the geometry, the default design
 //! space with bounds checked by the study.
 
-use std::io::BufReader;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
-use geom_db::GeomDb;
 
-use aeroshape::init::{InitOptions, Tolerance, init_case};
+use aeroshape::init::{InitOptions, init_case, read_cad};
 
 /// `aeroshape case` subcommands.
 #[derive(Debug, Subcommand)]
 pub enum CaseCmd {
-    /// Make a case from a CAD file (.igs, .iges or .ron) and a volume grid (.su2 or .msh):
-    /// the far field fixed, planes sliding, markers on the geometry wall (by shape, not by
-    /// name); writes DIR/case.ron, DIR/geometry.ron and DIR/grid.msh (parametric wall
-    /// nodes) and prints the design variables with their checked bounds.
+    /// Make a case from a CAD file (.igs, .iges, .stp, .step or .ron) and a volume grid
+    /// (.su2 or .msh): the far field fixed, planes sliding, markers on the geometry wall (by
+    /// shape, not by name); writes DIR/case.ron, DIR/geometry.ron and DIR/grid.msh
+    /// (parametric wall nodes) and prints the design variables (wing master, fuselage
+    /// waist, bumps) with their checked bounds.
     Init(InitArgs),
 }
 
 /// Arguments of `case init`.
 #[derive(Debug, Args)]
 pub struct InitArgs {
-    /// The CAD: IGES (.igs, .iges: imported) or a geometric database (.ron).
+    /// The CAD: IGES (.igs, .iges) or STEP (.stp, .step), imported as by `geom import`, or
+    /// a geometric database (.ron).
     pub cad: PathBuf,
     /// The volume grid (.su2 or .msh).
     pub grid: PathBuf,
@@ -35,44 +35,17 @@ pub struct InitArgs {
     /// of the default (1e-6) and the CAD's own figures.
     #[arg(long, value_name = "REL")]
     pub rel_tol: Option<f64>,
+    /// Make control nodes (one per interpolation point of every arc and patch, shared where
+    /// they coincide) when a `.ron` geometry has none; without it such a geometry is an
+    /// error. An imported IGES or STEP file always gets them.
+    #[arg(long)]
+    pub assign_control_nodes: bool,
 }
 
 /// Runs a `case` subcommand.
 pub fn run(cmd: CaseCmd) -> anyhow::Result<()> {
     match cmd {
         CaseCmd::Init(a) => init(&a),
-    }
-}
-
-/// The geometry of `cad` and the tolerance figures its import measured.
-fn load_cad(cad: &Path) -> anyhow::Result<(GeomDb, Vec<Tolerance>)> {
-    let ext = cad
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("ron") => Ok((super::geom::load(cad)?, Vec::new())),
-        Some("igs" | "iges") => {
-            let shown = cad.display().to_string();
-            let file = std::fs::File::open(cad).with_context(|| format!("cannot open {shown}"))?;
-            let iges = iges::read(BufReader::new(file), &shown)?;
-            let (db, report) = geom_db::import::import(&iges, &Default::default())?;
-            let tolerances = vec![
-                Tolerance {
-                    source: format!("{shown}: conversion tolerance of the import"),
-                    value: report.tolerance,
-                },
-                Tolerance {
-                    source: format!("{shown}: largest sewing gap measured at import, × 2"),
-                    value: 2.0 * report.max_sew_gap,
-                },
-            ];
-            Ok((db, tolerances))
-        }
-        _ => bail!(
-            "{}: unknown CAD format (use .igs, .iges or .ron; a STEP file: import it with another tool to IGES for now)",
-            cad.display()
-        ),
     }
 }
 
@@ -86,7 +59,7 @@ fn init(a: &InitArgs) -> anyhow::Result<()> {
         aeroshape::fsio::ensure_not_input(&a.output.join(f), &[&a.cad, &a.grid])
             .map_err(anyhow::Error::msg)?;
     }
-    let (db, cad) = load_cad(&a.cad)?;
+    let cad = read_cad(&a.cad)?;
     let grid = mesh::io::read_path(&a.grid)?;
     if grid.cells.is_empty() {
         bail!("{}: not a volume grid (no cells)", a.grid.display());
@@ -95,10 +68,26 @@ fn init(a: &InitArgs) -> anyhow::Result<()> {
         .with_context(|| format!("cannot create {}", a.output.display()))?;
     let opts = InitOptions {
         rel_tol: a.rel_tol,
+        assign_control_nodes: a.assign_control_nodes,
         ..InitOptions::default()
     };
-    let r = init_case(&db, &grid, &cad, &a.output, &opts)
-        .with_context(|| format!("{} with {}", a.cad.display(), a.grid.display()))?;
+    let r = init_case(&cad.db, &grid, &cad.tolerances, &a.output, &opts).map_err(|e| match e {
+        // the geometry's own defect: name its file alone
+        aeroshape::init::InitError::NoControlNodes { .. } => {
+            anyhow::anyhow!("{}: {e}", a.cad.display())
+        }
+        e => {
+            anyhow::Error::new(e).context(format!("{} with {}", a.cad.display(), a.grid.display()))
+        }
+    })?;
+    if cad.control_nodes_made > 0 {
+        outln!(
+            "{}: {} control nodes made at import (Eq. 9: one per interpolation point, shared \
+             where they coincide)",
+            a.cad.display(),
+            cad.control_nodes_made
+        );
+    }
     outln!("tolerance {:.3e}, the largest of:", r.tolerance);
     for t in &r.tolerances {
         outln!("  {:.3e}  {}", t.value, t.source);
@@ -121,6 +110,16 @@ fn init(a: &InitArgs) -> anyhow::Result<()> {
         r.classify.worst_node,
         r.classify.mean_distance
     );
+    if r.control_nodes_assigned > 0 {
+        outln!(
+            "control nodes: {} made (the geometry had none)",
+            r.control_nodes_assigned
+        );
+    }
+    outln!("design space:");
+    for b in &r.built {
+        outln!("  {b}");
+    }
     outln!(
         "design variables ({}), each alone at either bound keeps every cell valid:",
         r.variables.len()

@@ -78,11 +78,17 @@ fn load(case_path: &Path) -> anyhow::Result<(Case, GeomDb, Prepared)> {
     let text = std::fs::read_to_string(&gpath)
         .with_context(|| format!("{} (geometry of {})", gpath.display(), case_path.display()))?;
     let db = GeomDb::from_ron_str(&text, &gpath.display().to_string())?;
-    // External master generators (e.g. wingmaster's) are not available to this command yet;
-    // a case naming one gets a clear error from `bind`.
+    // the case's wing masters are the sources of its `External` master modifiers, as in
+    // `run` (a case naming another gets a clear error from `bind`)
+    let masters = if case.wing_masters.is_empty() {
+        MasterSources::new()
+    } else {
+        wingmaster::master::master_sources(&db, &case.parametrisation, &case.wing_masters)
+            .with_context(|| format!("{}: wing masters", case_path.display()))?
+    };
     let prep = case
         .parametrisation
-        .bind(&db, &MasterSources::new())
+        .bind(&db, &masters)
         .with_context(|| format!("{}: parametrisation", case_path.display()))?;
     let reach = aeroshape::reach::variable_reach(&prep)
         .with_context(|| format!("{}: parametrisation", case_path.display()))?;

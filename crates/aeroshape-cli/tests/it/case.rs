@@ -148,10 +148,18 @@ fn init_list_and_run_on_a_renamed_su2_grid() {
         init.contains("far field: its box holds every other marker"),
         "{init}"
     );
-    assert!(
-        init.contains("fuselage.bump") && init.contains("wing.bump"),
-        "{init}"
-    );
+    // the paper's variables: the wing master (planform, twist, thickness, camber) and the
+    // fuselage waist at the wing junction (Fig. 9)
+    for want in [
+        "fuselage.waist",
+        "wing.sweep",
+        "wing.twist.tip",
+        "wing.chord.tip",
+        "wing.tmax.tip",
+        "wing.camber.tip",
+    ] {
+        assert!(init.contains(want), "{want} missing: {init}");
+    }
 }
 
 /// The ONERA M6 of SU2's test cases (SolidWorks IGES) with the Gmsh grid made from it

@@ -9,9 +9,15 @@
 //! 3. the wall tied to the geometry by geometry alone (`surfgrid::classify_wall`), and the
 //!    whole volume grid written with parametric wall nodes (`DIR/grid.msh`), the geometry
 //!    (`DIR/geometry.ron`) and the case (`DIR/case.ron`);
-//! 4. the default design space ([`space`]), with every variable that moves no control node
-//!    left out, and its bounds checked by the study: each variable alone at either bound
-//!    leaves every cell valid.
+//! 4. the default design space ([`space`]): per part of the wall ([`parts`]), a wing
+//!    master for a wing wrapped round its leading edge ([`wing`]), the waist at the wing
+//!    junction for a fuselage ([`fuselage`]), normal bumps otherwise; every variable that
+//!    moves no control node left out, and the bounds checked by the study ([`bounds`]):
+//!    each variable alone at either bound leaves every cell valid.
+//!
+//! A geometry without control nodes (§3) cannot be moved by any design variable: that is
+//! an error ([`InitError::NoControlNodes`]) unless [`InitOptions::assign_control_nodes`]
+//! asks for them to be made.
 
 use std::path::{Path, PathBuf};
 
@@ -23,11 +29,17 @@ use crate::case::{CASE_FORMAT_VERSION, Case};
 use crate::fsio::write_atomic;
 use crate::study::{Study, StudyError};
 
+pub mod bounds;
+pub mod cad;
+pub mod fuselage;
+pub mod parts;
 pub mod roles;
 pub mod space;
+pub mod wing;
 
+pub use bounds::VariableCheck;
+pub use cad::{Cad, read_cad};
 pub use roles::{MarkerRole, Role};
-pub use space::VariableCheck;
 
 /// Errors of `case init`; each names the file, marker or variable.
 #[derive(Debug, thiserror::Error)]
@@ -41,14 +53,61 @@ pub enum InitError {
         /// What each marker was found to be.
         roles: Vec<MarkerRole>,
     },
-    /// A variable inverts cells even at its smallest bound tried.
-    #[error("design variable {variable:?} inverts cells even at ±{bound:.3e}")]
+    /// A variable inverts cells, or its evaluation fails, even at its smallest bound tried.
+    #[error("design variable {variable:?} fails even at ±{bound:.3e}: {why}")]
     Bounds {
         /// The variable.
         variable: String,
         /// The last bound tried.
         bound: f64,
+        /// What failed there.
+        why: String,
     },
+    /// The geometry has no control nodes, so no design variable can move it.
+    ///
+    /// ```
+    /// let err = aeroshape::init::InitError::NoControlNodes { surfaces: 5 };
+    /// assert!(err.to_string().contains("--assign-control-nodes"));
+    /// ```
+    #[error(
+        "the geometry has no control nodes (paper §3; {surfaces} support surfaces), so no \
+         design variable can move it: run case init again with --assign-control-nodes (one \
+         control node per interpolation point of every arc and patch, shared where they \
+         coincide), or give a geometry that has them"
+    )]
+    NoControlNodes {
+        /// Support surfaces of the geometry.
+        surfaces: usize,
+    },
+    /// No design variable of the default space moves the geometry.
+    #[error("no design variable of the default space moves the geometry ({})", notes.join("; "))]
+    NoVariables {
+        /// Why each candidate was left out.
+        notes: Vec<String>,
+    },
+    /// The CAD file's extension is not one `case init` reads.
+    #[error("{}: unknown CAD format (use .igs, .iges, .stp, .step or .ron)", path.display())]
+    CadFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A file could not be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The CAD file could not be imported (the message names the file and entity).
+    #[error(transparent)]
+    Import {
+        /// The import's error.
+        source: Box<geom_db::import::Error>,
+    },
+    /// The geometric database could not be read or its control nodes made.
+    #[error(transparent)]
+    Geometry(#[from] geom_db::Error),
     /// Classification or marker distances on the geometry.
     #[error("classification: {0}")]
     Surfgrid(#[from] surfgrid::Error),
@@ -82,6 +141,9 @@ pub struct InitOptions {
     pub bound_rel: f64,
     /// Largest number of halvings of a bound in the check.
     pub max_halvings: usize,
+    /// Make control nodes (`GeomDb::assign_control_nodes`) when the geometry has none,
+    /// instead of failing with [`InitError::NoControlNodes`].
+    pub assign_control_nodes: bool,
 }
 
 impl Default for InitOptions {
@@ -90,6 +152,7 @@ impl Default for InitOptions {
             rel_tol: None,
             bound_rel: 0.01,
             max_halvings: 8,
+            assign_control_nodes: false,
         }
     }
 }
@@ -105,6 +168,10 @@ pub struct InitReport {
     pub markers: Vec<MarkerRole>,
     /// The wall's classification.
     pub classify: surfgrid::ClassifyReport,
+    /// Control nodes made because the geometry had none (0: it had its own).
+    pub control_nodes_assigned: usize,
+    /// What each part of the wall got (wing master, waist, bumps), in words.
+    pub built: Vec<String>,
     /// The design variables with their checked bounds.
     pub variables: Vec<VariableCheck>,
     /// The case file written.
@@ -122,6 +189,19 @@ pub fn init_case(
     dir: &Path,
     opts: &InitOptions,
 ) -> Result<InitReport, InitError> {
+    let with_nodes;
+    let (db, control_nodes_assigned) = if !db.control_nodes.is_empty() {
+        (db, 0)
+    } else if opts.assign_control_nodes {
+        let mut d = db.clone();
+        d.assign_control_nodes()?;
+        with_nodes = d;
+        (&with_nodes, with_nodes.control_nodes.len())
+    } else {
+        return Err(InitError::NoControlNodes {
+            surfaces: db.surfaces.len(),
+        });
+    };
     let lref = db.reference_length();
     let mut tolerances = vec![Tolerance {
         source: "default: 1e-6 of the model's reference length".into(),
@@ -152,6 +232,16 @@ pub fn init_case(
     };
     let (surface, classify) = surfgrid::classify_wall(db, grid, &wall, &copts)?;
     let volume = surface.volume_with_params(grid);
+    // the default design space on the wall's surface components, dead variables left out
+    let mut walls: Vec<usize> = surface.components.iter().map(|c| c.comp.index()).collect();
+    walls.sort_unstable();
+    walls.dedup();
+    let wall_size = wall_diagonal(grid, &wall);
+    let mut space = space::default_space(db, &walls, opts.bound_rel * wall_size);
+    space::drop_dead(db, &mut space);
+    if space.parametrisation.modifiers.is_empty() {
+        return Err(InitError::NoVariables { notes: space.notes });
+    }
     let geometry_path = dir.join("geometry.ron");
     let grid_path = dir.join("grid.msh");
     let case_path = dir.join("case.ron");
@@ -163,37 +253,10 @@ pub fn init_case(
             w,
         )
     })?;
-    // the default design space: one bump per wall surface, dead ones left out
-    let mut walls: Vec<usize> = surface.components.iter().map(|c| c.comp.index()).collect();
-    walls.sort_unstable();
-    walls.dedup();
-    let wall_size = wall_diagonal(grid, &wall);
-    let mut parametrisation = space::candidate_space(db, &walls, opts.bound_rel * wall_size);
-    let mut notes = Vec::new();
-    parametrisation.modifiers.retain(|m| {
-        let one = param::Parametrisation {
-            modifiers: vec![m.clone()],
-            constraints: Vec::new(),
-        };
-        let live = one
-            .bind(db, &param::MasterSources::new())
-            .and_then(|p| crate::reach::variable_reach(&p));
-        match live {
-            Ok(r) if r.iter().all(|r| r.nodes_moved > 0) => true,
-            Ok(_) => {
-                notes.push(format!("{}: left out, it moves no control node", m.name()));
-                false
-            }
-            Err(e) => {
-                notes.push(format!("{}: left out: {e}", m.name()));
-                false
-            }
-        }
-    });
     let mut case = Case {
         format_version: CASE_FORMAT_VERSION,
         geometry: "geometry.ron".into(),
-        parametrisation,
+        parametrisation: space.parametrisation,
         grid: Some("grid.msh".into()),
         wall,
         slide,
@@ -203,26 +266,44 @@ pub fn init_case(
             classify_rel_tol: tol / lref,
             ..Default::default()
         },
-        wing_masters: Default::default(),
+        wing_masters: space.wing_masters,
     };
     let study = Study::new(case.clone(), &case_path)?;
-    let variables = space::check_bounds(&study, opts.max_halvings)?;
+    let checked = bounds::check_bounds(&study, opts.max_halvings)?;
+    drop(study);
+    let variables = checked.kept;
+    let mut space = space::Space {
+        parametrisation: case.parametrisation,
+        wing_masters: case.wing_masters,
+        built: space.built,
+        notes: space.notes,
+    };
+    let failed: Vec<String> = checked.failed.iter().map(|f| f.0.clone()).collect();
+    space::leave_out(&mut space, &failed);
+    space.notes.extend(
+        checked
+            .failed
+            .into_iter()
+            .map(|(_, why)| format!("left out: {why}")),
+    );
+    if space.parametrisation.modifiers.is_empty() {
+        return Err(InitError::NoVariables { notes: space.notes });
+    }
+    case.parametrisation = space.parametrisation;
+    case.wing_masters = space.wing_masters;
     for m in &mut case.parametrisation.modifiers {
-        if let param::Modifier::Surface(s) = m
-            && let param::SurfaceForm::Tensor { variables: vs } = &mut s.form
-        {
-            for v in vs {
-                if let Some(c) = variables.iter().find(|c| c.name == v.name) {
-                    v.lower = -c.bound;
-                    v.upper = c.bound;
-                    v.scale = c.bound / 10.0;
-                }
+        for v in space::variables_mut(m) {
+            if let Some(c) = variables.iter().find(|c| c.name == v.name) {
+                v.lower = -c.bound;
+                v.upper = c.bound;
+                v.scale = c.bound / 10.0;
             }
         }
     }
     let text = format!(
         "// Made by `aeroshape case init` (see docs/guide.md): markers by shape, wall tied to\n\
-         // the geometry, one normal bump per wall surface with bounds checked by the study.\n{}\n",
+         // the geometry; per part of the wall a wing master (wing), the waist at the wing\n\
+         // junction (fuselage) or normal bumps (other parts), bounds checked by the study.\n{}\n",
         case.to_ron_string()
     );
     write_atomic(&case_path, |w| w.write_all(text.as_bytes()))?;
@@ -231,9 +312,11 @@ pub fn init_case(
         tolerance: tol,
         markers,
         classify,
+        control_nodes_assigned,
+        built: space.built,
         variables,
         case: case_path,
-        notes,
+        notes: space.notes,
     })
 }
 
