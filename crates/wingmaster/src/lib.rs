@@ -37,6 +37,8 @@ pub use airfoil::{Airfoil, Frame, NormalisedAirfoil};
 pub use camber::CamberLine;
 pub use error::{Error, Result};
 pub use fit::{FitOptions, SectionFit, fit};
-pub use master::{KeySection, PlanformVariables, SectionFrame, WingMaster, WingMasterSpec};
+pub use master::{
+    KeySection, PlanformVariables, SectionFace, SectionFrame, WingMaster, WingMasterSpec,
+};
 pub use section::{Section, SectionParams, write_selig};
 pub use thickness::{ThicknessParams, ThicknessPolygon};

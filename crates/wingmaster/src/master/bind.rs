@@ -5,6 +5,19 @@
 
 use super::*;
 
+/// Samples one face at normalised (section s, span t), its reversals applied.
+fn sample_face(db: &GeomDb, f: &SectionFace, s: f64, t: f64) -> Point3 {
+    let surf = db.surface(f.surface);
+    let ([u0, u1], [v0, v1]) = surf.domain();
+    let s = if f.reverse_section { 1.0 - s } else { s };
+    let t = if f.reverse_span { 1.0 - t } else { t };
+    let (a, b) = match f.spanwise {
+        Param::V => (s, t),
+        Param::U => (t, s),
+    };
+    surf.point(u0 + a * (u1 - u0), v0 + b * (v1 - v0))
+}
+
 impl WingMasterSpec {
     /// Parses a spec from RON (with `param`'s RON options); `path` names the file.
     pub fn from_ron_str(text: &str, path: &str) -> Result<Self> {
@@ -48,15 +61,20 @@ impl WingMasterSpec {
         out
     }
 
-    /// Samples the surface at normalised (section s, span t).
+    /// Samples the wing at normalised (section s, span t): the surface, or with a
+    /// [`second`](Self::second) face the first surface for s ≤ ½ and the second above.
     fn sample(&self, db: &GeomDb, s: f64, t: f64) -> Point3 {
-        let surf = db.surface(self.surface);
-        let ([u0, u1], [v0, v1]) = surf.domain();
-        let (a, b) = match self.spanwise {
-            Param::V => (s, t),
-            Param::U => (t, s),
+        let face = SectionFace {
+            surface: self.surface,
+            spanwise: self.spanwise,
+            reverse_section: self.reverse_section,
+            reverse_span: self.reverse_span,
         };
-        surf.point(u0 + a * (u1 - u0), v0 + b * (v1 - v0))
+        match &self.second {
+            None => sample_face(db, &face, s, t),
+            Some(_) if s <= 0.5 => sample_face(db, &face, 2.0 * s, t),
+            Some(second) => sample_face(db, second, 2.0 * s - 1.0, t),
+        }
     }
 
     fn section_samples(&self, db: &GeomDb, t: f64) -> Vec<Point3> {
@@ -70,12 +88,14 @@ impl WingMasterSpec {
     /// x − x0). Samples the initial master and fits every key section; errors name the
     /// key section or the variable.
     pub fn bind(&self, db: &GeomDb, names: &[String], x0: &[f64]) -> Result<WingMaster> {
-        if self.surface.index() >= db.surfaces.len() {
-            return Err(err(format!(
-                "{} does not exist (the model has {} surfaces)",
-                self.surface,
-                db.surfaces.len()
-            )));
+        for s in std::iter::once(self.surface).chain(self.second.map(|f| f.surface)) {
+            if s.index() >= db.surfaces.len() {
+                return Err(err(format!(
+                    "{} does not exist (the model has {} surfaces)",
+                    s,
+                    db.surfaces.len()
+                )));
+            }
         }
         if self.n_s < 20 || self.n_t < 2 {
             return Err(err(format!(

@@ -106,11 +106,46 @@ pub struct WingMasterSpec {
     /// Extra thickness control points of the key-section fits.
     #[serde(default)]
     pub thickness_extra: usize,
+    /// The section parameter of `surface` runs the other way (the master samples it from
+    /// 1 to 0, so that a section starts at the trailing edge).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub reverse_section: bool,
+    /// The spanwise parameter of `surface` runs from the tip to the root (the master
+    /// samples it from 1 to 0, so that t = 0 is the root).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub reverse_span: bool,
+    /// A wing split at the leading edge over two support surfaces (upper and lower faces):
+    /// `surface` holds the section from the trailing edge to the leading edge, `second`
+    /// from the leading edge back to the trailing edge. Each section samples the first
+    /// surface for s ∈ [0, ½] and the second for s ∈ (½, 1].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub second: Option<SectionFace>,
     /// Planform-level variables.
     #[serde(default)]
     pub planform: PlanformVariables,
     /// The key sections, t increasing.
     pub key_sections: Vec<KeySection>,
+}
+
+/// The second face of a wing split at the leading edge ([`WingMasterSpec::second`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SectionFace {
+    /// Its support surface.
+    pub surface: SurfaceId,
+    /// Which of its parameters runs along the span.
+    pub spanwise: Param,
+    /// Its section parameter runs from the trailing edge to the leading edge (sampled
+    /// from 1 to 0, so that the section continues from the leading edge).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub reverse_section: bool,
+    /// Its spanwise parameter runs from the tip to the root.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub reverse_span: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 /// Planform-level design variables of a [`WingMasterSpec`] (absent: held at zero).
