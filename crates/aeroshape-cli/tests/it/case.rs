@@ -1,7 +1,7 @@
 //! `aeroshape case init` then `param list` and `run`, the three-command workflow, on grids
 //! whose markers carry no component names and no entity tags: the default case's grid as
-//! SU2 with its markers renamed, and (in `cargo xtask regress`) the ONERA M6 IGES with its
-//! Gmsh grid. With every default variable at 30 % of its bound at once: no inverted cell,
+//! SU2 with its markers renamed, the OpenCASCADE split wing (STEP) and the ONERA M6
+//! (SolidWorks IGES), each with the Gmsh grid made from it. With every default variable at 30 % of its bound at once: no inverted cell,
 //! wall nodes on the updated geometry (independent projection), far field exactly fixed,
 //! symmetry nodes in their plane.
 
@@ -162,21 +162,81 @@ fn init_list_and_run_on_a_renamed_su2_grid() {
     }
 }
 
-/// The ONERA M6 of SU2's test cases (SolidWorks IGES) with the Gmsh grid made from it
-/// (`fixtures/grids/oneram6.su2`): heavy, run by `cargo xtask regress`. With every default
-/// variable at 30 % of its bound once the import carries control nodes.
+/// The OpenCASCADE split wing (upper and lower faces on separate surfaces, AP214 STEP) with
+/// the Gmsh grid made from it (`fixtures/grids/split_wing.su2`): a wing master over the two
+/// faces, every variable at 30 % of its bound at once.
 #[test]
-#[ignore = "heavy: cargo xtask regress"]
+fn init_list_and_run_on_an_occ_step_split_wing_and_its_gmsh_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let cad = root().join("fixtures/cad/split_wing_ap214_m.stp");
+    let grid = root().join("fixtures/grids/split_wing.su2");
+    let init = three_commands(&cad, &grid, dir.path(), 0.3, true);
+    assert!(init.contains("STEP uncertainty"), "{init}");
+    assert!(init.contains("split at the leading edge"), "{init}");
+    for want in ["wing.twist.root", "wing.tmax.root", "wing.sweep"] {
+        assert!(init.contains(want), "{want} missing: {init}");
+    }
+}
+
+/// The ONERA M6 of SU2's test cases (SolidWorks IGES, upper and lower faces separate) with
+/// the Gmsh grid made from it (`fixtures/grids/oneram6.su2`): a wing master over the two
+/// faces (twist, sweep, chord, thickness, camber), every variable at 30 % of its bound.
+#[test]
 fn init_list_and_run_on_the_m6_iges_and_its_gmsh_grid() {
     let dir = tempfile::tempdir().unwrap();
     let cad = root().join("fixtures/iges/geom_oneram6.igs");
     let grid = root().join("fixtures/grids/oneram6.su2");
-    // the IGES import gives no control nodes yet (engineer C's import work): the design
-    // space may be empty, the run then checks the wall, far field and symmetry plane at the
-    // initial design
-    let init = three_commands(&cad, &grid, dir.path(), 0.3, false);
+    let init = three_commands(&cad, &grid, dir.path(), 0.3, true);
     assert!(init.contains("sewing gap"), "{init}");
+    assert!(init.contains("split at the leading edge"), "{init}");
     for want in ["wall", "slide", "fixed"] {
         assert!(init.contains(want), "{init}");
     }
+    for want in [
+        "wing.sweep",
+        "wing.twist.root",
+        "wing.twist.tip",
+        "wing.chord.tip",
+        "wing.tmax.tip",
+        "wing.camber.tip",
+    ] {
+        assert!(init.contains(want), "{want} missing: {init}");
+    }
+}
+
+/// A geometric database without control nodes is refused in one line naming the file.
+#[test]
+fn init_refuses_a_geometry_without_control_nodes() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = renamed_su2(dir.path());
+    let text =
+        std::fs::read_to_string(root().join("fixtures/cases/default/wing_body.ron")).unwrap();
+    let mut db = GeomDb::from_ron_str(&text, "wing_body.ron").unwrap();
+    db.control_nodes.clear();
+    for c in &mut db.curves {
+        c.control = Default::default();
+    }
+    for s in &mut db.surfaces {
+        s.control = Default::default();
+    }
+    let cad = dir.path().join("bare.ron");
+    let mut f = std::fs::File::create(&cad).unwrap();
+    db.write_ron(&mut f).unwrap();
+    drop(f);
+    let o = bin()
+        .args(["case", "init"])
+        .arg(&cad)
+        .arg(&grid)
+        .arg("-o")
+        .arg(dir.path().join("case"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("bare.ron: the geometry has no control nodes"),
+        "{err}"
+    );
+    assert!(!dir.path().join("case/case.ron").exists());
 }
