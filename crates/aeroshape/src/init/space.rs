@@ -144,6 +144,10 @@ pub fn default_space(db: &GeomDb, walls: &[usize], bump_bound: f64) -> Space {
             }
         };
         if let Some(why) = fallback {
+            space.built.push(format!(
+                "{}: one normal bump per surface (see the note)",
+                part.role
+            ));
             space
                 .notes
                 .push(format!("{why}; one normal bump per surface instead"));
