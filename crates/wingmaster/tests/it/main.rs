@@ -7,6 +7,7 @@ mod modify;
 mod parse;
 mod planform;
 mod props;
+mod split;
 
 use std::path::PathBuf;
 
