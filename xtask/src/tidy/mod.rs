@@ -97,9 +97,19 @@ pub const GEOMETRY_AND_GRID: &[Knows] = &[
     },
     Knows {
         krate: "aeroshape",
-        geom_db: &["GeomDb", "Error", "prelude"],
+        geom_db: &[
+            "GeomDb",
+            "Error",
+            "prelude",
+            "SurfaceId",
+            "CurveCompId",
+            "eval",
+            "import",
+        ],
         intersect: &["Error", "update"],
-        why: "drives the chain; ties the wall to the geometry through surfgrid",
+        why: "drives the chain; ties the wall to the geometry through surfgrid; `case init` \
+              imports the CAD and samples its surfaces and curves (never grid nodes) for the \
+              default design space",
     },
     Knows {
         krate: "aeroshape-py",
