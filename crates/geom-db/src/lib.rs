@@ -31,6 +31,7 @@ pub mod eval;
 pub mod ids;
 pub mod import;
 pub mod invert;
+pub mod linearise;
 pub mod merge;
 pub mod newton;
 pub mod poly;

@@ -31,6 +31,10 @@
 //! maps independent items and collects in order. Zero control-node change returns the
 //! initial model bit for bit (nothing is marked changed, so nothing is recomputed).
 
+mod linearise;
+
+pub use linearise::ModelLinearisation;
+
 use crate::corner::{CornerOptions, solve_corner};
 use crate::error::{Error, Result};
 use crate::project::{ProjectOptions, SurfaceProjector};

@@ -3,6 +3,7 @@
 mod accuracy;
 mod corner;
 mod fixture;
+mod linearise;
 mod model;
 mod project;
 mod props;
