@@ -16,11 +16,11 @@
 //! by `intersect`), corners and curve components' parameter ranges. See
 //! docs/crates/geom-db.md, "Linearisation".
 
+use crate::GeomDb;
 use crate::control::{self, MAX_DEGREE};
 use crate::curve::locate;
 use crate::ids::{CurveId, SurfaceId};
 use crate::prelude::Vector3;
-use crate::GeomDb;
 
 const M: usize = MAX_DEGREE + 1;
 
@@ -218,10 +218,7 @@ impl ModelTangent {
         }
         let (p, lu, lv) = surf.locate(u, v);
         let patch = &surf.patches[p];
-        let (a, b) = (
-            Lagrange::at(patch.deg_u, lu),
-            Lagrange::at(patch.deg_v, lv),
-        );
+        let (a, b) = (Lagrange::at(patch.deg_u, lu), Lagrange::at(patch.deg_v, lv));
         let m1 = patch.deg_v + 1;
         for (k, id) in surf.control.nodes[p].iter().enumerate() {
             let (i, j) = (k / m1, k % m1);
@@ -234,17 +231,21 @@ impl ModelTangent {
     }
 
     /// The transpose of [`surface_at`](Self::surface_at).
-    pub fn add_surface_at(&mut self, db: &GeomDb, s: SurfaceId, u: f64, v: f64, bar: &SurfaceTangent) {
+    pub fn add_surface_at(
+        &mut self,
+        db: &GeomDb,
+        s: SurfaceId,
+        u: f64,
+        v: f64,
+        bar: &SurfaceTangent,
+    ) {
         let surf = db.surface(s);
         if surf.control.is_empty() {
             return;
         }
         let (p, lu, lv) = surf.locate(u, v);
         let patch = &surf.patches[p];
-        let (a, b) = (
-            Lagrange::at(patch.deg_u, lu),
-            Lagrange::at(patch.deg_v, lv),
-        );
+        let (a, b) = (Lagrange::at(patch.deg_u, lu), Lagrange::at(patch.deg_v, lv));
         let m1 = patch.deg_v + 1;
         for (k, id) in surf.control.nodes[p].iter().enumerate() {
             let (i, j) = (k / m1, k % m1);
@@ -257,7 +258,12 @@ impl ModelTangent {
     /// ⟨self, other⟩ over every entry (nodes, the curves' own control points where both
     /// carry them, corners, ranges).
     pub fn dot(&self, other: &Self) -> f64 {
-        let mut s: f64 = self.nodes.iter().zip(&other.nodes).map(|(a, b)| a.dot(b)).sum();
+        let mut s: f64 = self
+            .nodes
+            .iter()
+            .zip(&other.nodes)
+            .map(|(a, b)| a.dot(b))
+            .sum();
         for (a, b) in self.curves.iter().zip(&other.curves) {
             if let (Some(a), Some(b)) = (a, b) {
                 for (x, y) in a.iter().zip(b) {
@@ -308,8 +314,14 @@ mod tests {
             for j in 0..=n {
                 let d1 = (lp.value[j] - lm.value[j]) / (2.0 * h);
                 let d2 = (lp.d1[j] - lm.d1[j]) / (2.0 * h);
-                assert!((d1 - l.d1[j]).abs() < 1e-6 * (1.0 + d1.abs()), "n={n} d1 {j}");
-                assert!((d2 - l.d2[j]).abs() < 1e-5 * (1.0 + d2.abs()), "n={n} d2 {j}");
+                assert!(
+                    (d1 - l.d1[j]).abs() < 1e-6 * (1.0 + d1.abs()),
+                    "n={n} d1 {j}"
+                );
+                assert!(
+                    (d2 - l.d2[j]).abs() < 1e-5 * (1.0 + d2.abs()),
+                    "n={n} d2 {j}"
+                );
             }
         }
     }

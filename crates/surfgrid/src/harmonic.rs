@@ -115,6 +115,46 @@ impl HarmonicMap {
         }
     }
 
+    /// The transpose of [`solve`](Self::solve) (the map from the boundary data to the free
+    /// nodes' solution is x = A_ff⁻¹ R d_b, R summing each free node's fixed neighbours; its
+    /// transpose is Rᵀ A_ff⁻¹, A_ff being symmetric): `bar[n_fixed..]` holds the cotangent of
+    /// the free nodes' solution; the cotangent of the boundary data is added to
+    /// `bar[..n_fixed]`, and `bar[n_fixed..]` is zeroed.
+    pub fn solve_transpose(&self, bar: &mut [[f64; 2]]) {
+        let m = self.a.n();
+        if m == 0 {
+            return;
+        }
+        let z: Vec<[f64; 2]> = match &self.factor {
+            Some(f) => {
+                let mut z = vec![[0.0; 2]; m];
+                for comp in 0..2 {
+                    let b: Vec<f64> = (0..m).map(|i| bar[i + self.n_fixed][comp]).collect();
+                    for (zi, v) in z.iter_mut().zip(f.solve(&b)) {
+                        zi[comp] = v;
+                    }
+                }
+                z
+            }
+            None => {
+                let b: Vec<V3> = (0..m)
+                    .map(|i| [bar[i + self.n_fixed][0], bar[i + self.n_fixed][1], 0.0])
+                    .collect();
+                self.pcg_solve(&b)
+                    .into_iter()
+                    .map(|v| [v[0], v[1]])
+                    .collect()
+            }
+        };
+        for (i, zi) in z.iter().enumerate() {
+            for &w in &self.fixed_adj[self.fixed_ptr[i]..self.fixed_ptr[i + 1]] {
+                bar[w as usize][0] += zi[0];
+                bar[w as usize][1] += zi[1];
+            }
+            bar[i + self.n_fixed] = [0.0; 2];
+        }
+    }
+
     /// Right-hand side: per free node, the sum of its fixed neighbours' boundary data (both
     /// coordinates; the third component zero).
     fn rhs(&self, d: &[[f64; 2]]) -> Vec<V3> {
@@ -130,8 +170,12 @@ impl HarmonicMap {
     /// Jacobi-preconditioned conjugate gradients from zero to a relative residual of 1e-8,
     /// both coordinates at once.
     fn iterative(&self, d: &[[f64; 2]]) -> Vec<V3> {
+        self.pcg_solve(&self.rhs(d))
+    }
+
+    /// A_ff x = b by Jacobi-preconditioned conjugate gradients (see [`Self::iterative`]).
+    fn pcg_solve(&self, b: &[V3]) -> Vec<V3> {
         let m = self.a.n();
-        let b = self.rhs(d);
         let mut x = vec![[0.0; 3]; m];
         let opts = SolveOptions {
             rel_tol: 1e-8,
@@ -139,7 +183,7 @@ impl HarmonicMap {
         };
         pcg(
             &self.a,
-            &b,
+            b,
             &mut x,
             &Jacobi::new(&self.a),
             &Constraints::default(),
@@ -200,6 +244,34 @@ mod tests {
             })
             .collect();
         (tris, uv, nb)
+    }
+
+    #[test]
+    fn transpose_solve_is_the_transpose() {
+        let (tris, uv, nb) = square(7);
+        let map = HarmonicMap::new(&tris, uv.len(), nb);
+        let n = uv.len();
+        let r = |k: usize, c: usize| ((k * 7 + c * 3) as f64 * 0.37).sin();
+        let mut d: Vec<[f64; 2]> = (0..n)
+            .map(|k| if k < nb { [r(k, 0), r(k, 1)] } else { [0.0; 2] })
+            .collect();
+        let db = d.clone();
+        map.solve(&mut d);
+        let ybar: Vec<[f64; 2]> = (0..n)
+            .map(|k| if k < nb { [0.0; 2] } else { [r(k, 5), r(k, 2)] })
+            .collect();
+        let mut xb = ybar.clone();
+        map.solve_transpose(&mut xb);
+        let lhs: f64 = (nb..n)
+            .map(|k| d[k][0] * ybar[k][0] + d[k][1] * ybar[k][1])
+            .sum();
+        let rhs: f64 = (0..nb)
+            .map(|k| db[k][0] * xb[k][0] + db[k][1] * xb[k][1])
+            .sum();
+        assert!(
+            (lhs - rhs).abs() < 1e-12 * lhs.abs().max(1.0),
+            "{lhs} vs {rhs}"
+        );
     }
 
     #[test]

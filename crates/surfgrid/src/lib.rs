@@ -18,6 +18,8 @@
 //! * [`grid`]: nodes with their support and parameters, per-component parametric grids,
 //!   conversion to `mesh::Mesh` with Gmsh-like classification.
 //! * [`classify`](mod@classify): an imported grid (SU2, no parameters) tied to the geometry by projection.
+//! * [`linearise`]: forward and reverse products of the update for a perturbation of the
+//!   updated model (issue 22).
 //! * [`update`](mod@update): re-evaluation at frozen parameters after a model update, with a harmonic
 //!   re-map of a component whose boundary moved in its parametric plane and smoothing (§3.3).
 
@@ -28,6 +30,7 @@ pub mod error;
 pub mod generate;
 pub mod grid;
 pub mod harmonic;
+pub mod linearise;
 pub mod pole;
 mod smooth;
 pub mod spacing;
@@ -38,6 +41,7 @@ pub use classify::{ClassifyOptions, ClassifyReport, classify, classify_wall};
 pub use error::{Error, Result};
 pub use generate::{GenerateOptions, generate};
 pub use grid::{ComponentGrid, NodeSupport, PoleCopy, SurfaceGrid};
+pub use linearise::SurfaceLinearisation;
 pub use spacing::SizeField;
 pub use stats::{GridStats, grid_stats};
 pub use update::{UpdateOptions, UpdateReport, Updater, evaluate_frozen, update};

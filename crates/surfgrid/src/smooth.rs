@@ -106,6 +106,13 @@ impl Improve<'_> {
 
     /// One Laplacian smoothing pass over the free nodes; returns the number moved.
     pub fn smooth_pass(&mut self) -> usize {
+        self.smooth_pass_recorded(None)
+    }
+
+    /// [`smooth_pass`](Self::smooth_pass), appending each accepted move to `rec` as (node,
+    /// step fraction w): the node's (u, v) became (1 − w) (u, v) + w × the mean of its
+    /// neighbours' (u, v) at that moment (the linearisation replays them).
+    pub fn smooth_pass_recorded(&mut self, mut rec: Option<&mut Vec<(u32, f64)>>) -> usize {
         let n = self.uv.len();
         let mut inc: Vec<Vec<u32>> = vec![Vec::new(); n];
         for (k, t) in self.tris.iter().enumerate() {
@@ -146,7 +153,7 @@ impl Improve<'_> {
             let (bad0, q0) = score(self);
             let (old_uv, old_x) = (self.uv[v], self.x[v]);
             // try the full Laplacian step, then half of it
-            let mut accepted = false;
+            let mut accepted = None;
             for w in [1.0, 0.5] {
                 let p = [
                     old_uv[0] + w * (c[0] - old_uv[0]),
@@ -156,12 +163,15 @@ impl Improve<'_> {
                 self.x[v] = (self.eval)(p);
                 let (bad1, q1) = score(self);
                 if bad1 < bad0 || (bad1 == bad0 && q1 >= q0 - 1e-12 * q0.abs()) {
-                    accepted = true;
+                    accepted = Some(w);
                     break;
                 }
             }
-            if accepted {
+            if let Some(w) = accepted {
                 moved += 1;
+                if let Some(r) = rec.as_deref_mut() {
+                    r.push((v as u32, w));
+                }
             } else {
                 self.uv[v] = old_uv;
                 self.x[v] = old_x;

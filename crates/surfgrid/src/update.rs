@@ -164,6 +164,13 @@ impl Updater {
         }
     }
 
+    /// The harmonic re-map of component `ci` of `grid` (the grid this updater was made for),
+    /// factorised on first use.
+    pub(crate) fn harmonic(&self, ci: usize, grid: &SurfaceGrid) -> &HarmonicMap {
+        let cg = &grid.components[ci];
+        self.maps[ci].get_or_init(|| HarmonicMap::new(&cg.triangles, cg.nodes.len(), cg.n_boundary))
+    }
+
     /// [`update`] of `grid`, the grid this updater was made for.
     pub fn update(
         &self,
@@ -171,6 +178,30 @@ impl Updater {
         old: &GeomDb,
         new: &GeomDb,
         opts: &UpdateOptions,
+    ) -> Result<(SurfaceGrid, UpdateReport)> {
+        self.run(grid, old, new, opts, None)
+    }
+
+    /// [`update`](Self::update) recording, per component, the smoothing moves it made (see
+    /// [`crate::linearise`]).
+    pub(crate) fn update_recorded(
+        &self,
+        grid: &SurfaceGrid,
+        old: &GeomDb,
+        new: &GeomDb,
+        opts: &UpdateOptions,
+        moves: &mut Vec<Vec<(u32, f64)>>,
+    ) -> Result<(SurfaceGrid, UpdateReport)> {
+        self.run(grid, old, new, opts, Some(moves))
+    }
+
+    fn run(
+        &self,
+        grid: &SurfaceGrid,
+        old: &GeomDb,
+        new: &GeomDb,
+        opts: &UpdateOptions,
+        rec: Option<&mut Vec<Vec<(u32, f64)>>>,
     ) -> Result<(SurfaceGrid, UpdateReport)> {
         let shape: Vec<_> = grid
             .components
@@ -189,7 +220,7 @@ impl Updater {
             other = worst_per_component(grid);
             &other
         };
-        update_with(grid, old, new, opts, &self.maps, worst_initial)
+        update_with(grid, old, new, opts, &self.maps, worst_initial, rec)
     }
 }
 
@@ -200,6 +231,7 @@ fn update_with(
     opts: &UpdateOptions,
     maps: &[OnceLock<HarmonicMap>],
     worst_initial: &[f64],
+    mut rec: Option<&mut Vec<Vec<(u32, f64)>>>,
 ) -> Result<(SurfaceGrid, UpdateReport)> {
     if old.corners.len() != new.corners.len()
         || old.curve_components.len() != new.curve_components.len()
@@ -312,11 +344,12 @@ fn update_with(
         };
         let mut passes = 0;
         let mut w = worst_before;
+        let mut moves = Vec::new();
         if remapped {
             while passes < opts.max_passes
                 && (imp.n_inverted() > 0 || w < opts.quality_fraction * worst_initial)
             {
-                imp.smooth_pass();
+                imp.smooth_pass_recorded(rec.is_some().then_some(&mut moves));
                 passes += 1;
                 w = worst(&imp.tris, &imp.uv, &imp.x);
             }
@@ -342,6 +375,9 @@ fn update_with(
                 comp: cg.comp,
                 uv: oc.uv[k],
             };
+        }
+        if let Some(r) = rec.as_deref_mut() {
+            r.push(moves);
         }
         reports.push(ComponentUpdate {
             comp: cg.comp.0,

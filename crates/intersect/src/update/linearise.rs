@@ -523,7 +523,11 @@ impl ModelLinearisation {
         if dp.len() != self.n_in {
             return Err(Error::BadEntity {
                 entity: "model".into(),
-                reason: format!("{} node perturbations for {} control nodes", dp.len(), self.n_in),
+                reason: format!(
+                    "{} node perturbations for {} control nodes",
+                    dp.len(),
+                    self.n_in
+                ),
             });
         }
         let db = &self.model;
@@ -619,7 +623,9 @@ impl ModelLinearisation {
         for (ci, b) in bar.curves.iter().enumerate() {
             match (b, &mut w.curves[ci]) {
                 (Some(b), Some(own)) => {
-                    if b.len() != own.len() || b.iter().zip(own.iter()).any(|(x, y)| x.len() != y.len()) {
+                    if b.len() != own.len()
+                        || b.iter().zip(own.iter()).any(|(x, y)| x.len() != y.len())
+                    {
                         return Err(Error::BadEntity {
                             entity: curve_label(db, CurveId::from_index(ci)),
                             reason: "a cotangent with other arcs than the updated curve".into(),
@@ -630,7 +636,9 @@ impl ModelLinearisation {
                 (Some(_), None) => {
                     return Err(Error::BadEntity {
                         entity: curve_label(db, CurveId::from_index(ci)),
-                        reason: "a cotangent of own control points for a curve that follows its nodes".into(),
+                        reason:
+                            "a cotangent of own control points for a curve that follows its nodes"
+                                .into(),
                     });
                 }
                 _ => {}

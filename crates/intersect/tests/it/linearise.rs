@@ -21,7 +21,10 @@ fn field(p: &Point3, k: f64) -> Vector3 {
 }
 
 fn moved(db: &GeomDb, s: f64, k: f64) -> Vec<Point3> {
-    db.control_points().iter().map(|p| p + field(p, k) * s).collect()
+    db.control_points()
+        .iter()
+        .map(|p| p + field(p, k) * s)
+        .collect()
 }
 
 /// The outputs compared: every control node, every corner, every range, and the control
@@ -78,7 +81,11 @@ fn check_forward(s: f64) {
     let x = moved(&db, s, 0.3);
     let (updated, _) = base.update(&x).unwrap();
     let lin = base.linearise(&x, &updated).unwrap();
-    let own: Vec<usize> = lin.intersection_curves().iter().map(|c| c.index()).collect();
+    let own: Vec<usize> = lin
+        .intersection_curves()
+        .iter()
+        .map(|c| c.index())
+        .collect();
     assert!(!own.is_empty());
     let dp: Vec<Vector3> = db.control_points().iter().map(|p| field(p, 1.1)).collect();
     let t = lin.jvp(&dp).unwrap();
@@ -90,11 +97,18 @@ fn check_forward(s: f64) {
     let minus: Vec<Point3> = x.iter().zip(&dp).map(|(p, d)| p - d * h).collect();
     let fp = flatten_model(&base.update(&plus).unwrap().0, &own);
     let fm = flatten_model(&base.update(&minus).unwrap().0, &own);
-    let fd: Vec<f64> = fp.iter().zip(&fm).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+    let fd: Vec<f64> = fp
+        .iter()
+        .zip(&fm)
+        .map(|(a, b)| (a - b) / (2.0 * h))
+        .collect();
     assert_eq!(fd.len(), jv.len());
     let err: Vec<f64> = fd.iter().zip(&jv).map(|(a, b)| a - b).collect();
     let rel = norm(&err) / norm(&fd);
-    eprintln!("model update at s = {s}: |FD| = {:.4e}, relative error {rel:.3e}", norm(&fd));
+    eprintln!(
+        "model update at s = {s}: |FD| = {:.4e}, relative error {rel:.3e}",
+        norm(&fd)
+    );
     assert!(rel < 1e-6, "relative error {rel:.3e}");
     // the junction's control points are not the nodes' own motion: they are re-intersected
     let n = db.control_nodes.len();
@@ -113,10 +127,16 @@ fn check_forward(s: f64) {
         jn = jn.max(d.norm());
         moved_by_field = moved_by_field.max((d - dp[i]).norm());
         let j = Vector3::new(jv[3 * i], jv[3 * i + 1], jv[3 * i + 2]);
-        assert!((d - j).norm() <= 1e-6 * norm(&fd), "junction node {i}: {d} vs {j}");
+        assert!(
+            (d - j).norm() <= 1e-6 * norm(&fd),
+            "junction node {i}: {d} vs {j}"
+        );
     }
     assert!(jn > 1e-2, "junction rows near zero: {jn}");
-    assert!(moved_by_field > 1e-3, "junction rows equal the field: {moved_by_field}");
+    assert!(
+        moved_by_field > 1e-3,
+        "junction rows equal the field: {moved_by_field}"
+    );
 }
 
 #[test]
@@ -131,9 +151,13 @@ fn forward_product_matches_central_differences_at_the_baseline() {
 }
 
 fn random_cotangent(lin: &intersect::update::ModelLinearisation, seed: u64) -> ModelTangent {
-    let mut s = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let mut s = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     let mut r = move || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     };
     let mut t = lin.zero_tangent();
@@ -176,4 +200,3 @@ proptest! {
         prop_assert!((a - b).abs() <= 1e-10 * scale, "{a} vs {b} (scale {scale})");
     }
 }
-

@@ -135,18 +135,25 @@ pub(super) fn component_grid(
         ltris.push(lt);
     }
     // A mesher orients its boundary triangles as it pleases (Gmsh and SU2 follow the CAD
-    // face, or the fluid): the component's triangles turn counter-clockwise in (u, v) when
-    // most of them do not, so that only a triangle folded against its neighbours counts as
-    // inverted.
-    let orient = |t: &[u32; 3]| {
-        let [a, b, c] = t.map(|l| ln.uv[l as usize]);
-        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    // face, or the fluid), so a component may come out clockwise in (u, v). When most of its
+    // triangles do, reverse the local triangles (the update needs them counter-clockwise) and
+    // the flip, so that the global triangles keep the grid's own orientation and only a
+    // triangle folded against its neighbours counts as inverted.
+    let cw = ltris
+        .iter()
+        .filter(|t| {
+            let [a, b, d] = t.map(|l| ln.uv[l as usize]);
+            (b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]) < 0.0
+        })
+        .count();
+    let flip = if 2 * cw > ltris.len() {
+        for t in &mut ltris {
+            t.swap(1, 2);
+        }
+        !flip
+    } else {
+        flip
     };
-    let negative = ltris.iter().filter(|t| orient(t) < 0.0).count();
-    let positive = ltris.iter().filter(|t| orient(t) > 0.0).count();
-    if negative > positive {
-        ltris.iter_mut().for_each(|t| t.swap(1, 2));
-    }
     Ok(boundary_first(c, flip, &ln, &ltris))
 }
 

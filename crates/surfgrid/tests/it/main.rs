@@ -4,6 +4,7 @@ mod classify;
 mod common;
 mod curves;
 mod generate;
+mod linearise;
 mod poles;
 mod update;
 mod wall;
