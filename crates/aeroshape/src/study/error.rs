@@ -117,6 +117,16 @@ pub enum StudyError {
     /// The volume deformation of an evaluation failed.
     #[error("deform: {0}")]
     Deform(#[from] deform::Error),
+    /// A vector given to a product of the linearised chain has the wrong length.
+    #[error("{what}: {found} values, expected {expected}")]
+    ProductLength {
+        /// What the vector is.
+        what: &'static str,
+        /// The length expected.
+        expected: usize,
+        /// The length given.
+        found: usize,
+    },
 }
 
 /// Result alias of this module.

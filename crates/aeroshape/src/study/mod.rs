@@ -62,10 +62,12 @@ use crate::case::Case;
 
 pub mod error;
 mod evaluate;
+pub mod linearise;
 pub mod report;
 mod setup;
 
 pub use error::{Result, StudyError};
+pub use linearise::{ChainLinearisation, FdCheck};
 pub use report::{DeformPhase, ModelPhase, ParamPhase, Quality, Report, SetupReport, SurfacePhase};
 
 /// The result of [`Study::evaluate`].
