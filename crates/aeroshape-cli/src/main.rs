@@ -25,6 +25,7 @@ mod case;
 mod deform;
 mod geom;
 mod geom_import;
+mod gradient;
 mod mesh;
 mod param;
 mod pictures;
@@ -51,6 +52,9 @@ enum Command {
     /// Inspect and check geometric databases (RON).
     #[command(subcommand)]
     Geom(geom::GeomCmd),
+    /// The gradient dJ/d(design variables) from a flow adjoint's dJ/d(grid coordinates)
+    /// (SU2's RESTART_ASCII or surface-sensitivity CSV): the chain's reverse product.
+    Gradient(gradient::GradientArgs),
     /// Inspect grids (counts, markers, quality) and convert between .su2, .msh and .vtu.
     #[command(subcommand)]
     Mesh(mesh::MeshCmd),
@@ -151,6 +155,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Case(cmd) => case::run(cmd),
         Command::Deform(args) => deform::run(args),
         Command::Geom(cmd) => geom::run(cmd),
+        Command::Gradient(args) => gradient::run(args),
         Command::Mesh(cmd) => mesh::run(cmd),
         Command::Param(cmd) => param::run(cmd),
         Command::Run(args) => run::run(args),

@@ -5,6 +5,13 @@
 //! - `warm_same_x`: `x` again, warm-started from the previous evaluation of `x`;
 //! - `warm_step`: alternately `x` and `1.01 x`, each warm-started from the other (an
 //!   optimiser's step).
+//!
+//! The chain's derivatives at `x` (issue 22), group `gradient`:
+//! - `linearise`: `Study::linearise` (a cold evaluation and every phase's linearisation);
+//! - `jvp`, `vjp`: one forward / reverse product of that linearisation (volume);
+//! - `vjp_wall`: the reverse product from wall sensitivities (no volume solve);
+//! - `reverse_total`: `linearise` + `vjp`, the whole gradient from scratch;
+//! - `fd_gradient`: the gradient by central differences, 2n cold evaluations.
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -39,6 +46,55 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             flip = !flip;
             black_box(study.evaluate(if flip { &step } else { &x }).unwrap())
+        })
+    });
+    g.finish();
+    gradient(c, &study, &x);
+}
+
+fn gradient(c: &mut Criterion, study: &Study, x: &[f64]) {
+    let n = study.baseline().n_nodes();
+    let w: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let t = i as f64;
+            [(0.37 * t).sin(), (0.11 * t).cos(), (0.23 * t + 1.0).sin()]
+        })
+        .collect();
+    let dx: Vec<f64> = (0..x.len()).map(|l| ((l as f64) * 0.7).sin()).collect();
+    let lin = study.linearise(x).unwrap();
+    let mut g = c.benchmark_group("gradient");
+    g.sample_size(10);
+    g.bench_function("linearise", |b| {
+        b.iter(|| black_box(study.linearise(x).unwrap().x().len()))
+    });
+    g.bench_function("jvp", |b| b.iter(|| black_box(lin.jvp(&dx).unwrap())));
+    g.bench_function("vjp", |b| b.iter(|| black_box(lin.vjp(&w).unwrap())));
+    g.bench_function("vjp_wall", |b| {
+        b.iter(|| black_box(lin.vjp_wall(&w).unwrap()))
+    });
+    g.bench_function("reverse_total", |b| {
+        b.iter(|| black_box(study.linearise(x).unwrap().vjp(&w).unwrap()))
+    });
+    g.bench_function("fd_gradient", |b| {
+        b.iter(|| {
+            let mut y = x.to_vec();
+            let grad: Vec<f64> = (0..x.len())
+                .map(|l| {
+                    let h = 1e-4;
+                    let mut j = |s: f64| -> f64 {
+                        y[l] = x[l] + s * h;
+                        study.forget_warm_start();
+                        let c = study.evaluate(&y).unwrap().grid.coords;
+                        y[l] = x[l];
+                        c.iter()
+                            .zip(&w)
+                            .map(|(p, q)| p[0] * q[0] + p[1] * q[1] + p[2] * q[2])
+                            .sum()
+                    };
+                    (j(1.0) - j(-1.0)) / (2.0 * h)
+                })
+                .collect();
+            black_box(grad)
         })
     });
     g.finish();

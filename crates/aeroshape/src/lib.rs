@@ -10,6 +10,7 @@ pub mod fsio;
 pub mod init;
 pub mod precedence;
 pub mod reach;
+pub mod sensitivity;
 pub mod study;
 
 pub use study::{Evaluation, Study};

@@ -4,6 +4,7 @@
 mod case;
 mod deform;
 mod geom;
+mod gradient;
 mod mesh;
 mod param;
 mod pipe;

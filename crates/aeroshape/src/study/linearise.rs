@@ -75,25 +75,22 @@ fn length(what: &'static str, expected: usize, found: usize) -> Result<()> {
     }
 }
 
-/// J v for the param Jacobian (rows 3k + c): one vector per control node.
+/// J v for the param Jacobian (CSR, rows 3k + c): one vector per control node.
 fn jac_times(j: &param::Jacobian, v: &[f64]) -> Vec<Vector3> {
-    let mut out = vec![Vector3::zeros(); j.n_rows / 3];
-    for (r, o) in (0..j.n_rows).map(|r| (r, r / 3)) {
-        let s: f64 = (j.row_ptr[r]..j.row_ptr[r + 1])
-            .map(|k| j.values[k] * v[j.col_idx[k]])
-            .sum();
-        out[o][r % 3] = s;
+    let mut out = vec![Vector3::zeros(); j.rows() / 3];
+    for (r, row) in j.outer_iterator().enumerate() {
+        out[r / 3][r % 3] = row.iter().map(|(c, a)| a * v[c]).sum();
     }
     out
 }
 
 /// Jᵀ w for the param Jacobian.
 fn jac_t_times(j: &param::Jacobian, w: &[Vector3]) -> Vec<f64> {
-    let mut out = vec![0.0; j.n_cols];
-    for r in 0..j.n_rows {
+    let mut out = vec![0.0; j.cols()];
+    for (r, row) in j.outer_iterator().enumerate() {
         let wr = w[r / 3][r % 3];
-        for k in j.row_ptr[r]..j.row_ptr[r + 1] {
-            out[j.col_idx[k]] += j.values[k] * wr;
+        for (c, a) in row.iter() {
+            out[c] += a * wr;
         }
     }
     out

@@ -40,7 +40,7 @@ struct Outcome {
 
 /// At control nodes moved by `s` × field, the forward product against central differences
 /// of step `h` (relative to the norm), and the dot-product test.
-fn check(db: &GeomDb, grid: &SurfaceGrid, s: f64, h: f64) -> Outcome {
+fn check(db: &GeomDb, grid: &SurfaceGrid, s: f64, h: f64, junction_rel_tol: f64) -> Outcome {
     // the wall's size (an imported model's far field would dwarf it)
     let on = |i: &usize| !matches!(grid.support[*i], surfgrid::NodeSupport::Free);
     let (mut lo, mut hi) = (
@@ -52,7 +52,8 @@ fn check(db: &GeomDb, grid: &SurfaceGrid, s: f64, h: f64) -> Outcome {
         hi = hi.sup(&grid.coords[i].coords);
     }
     let l = (hi - lo).norm();
-    let base = ModelBaseline::new(db, &ModelOptions::default()).unwrap();
+    let mopts = ModelOptions::default().with_junction_rel_tol(junction_rel_tol);
+    let base = ModelBaseline::new(db, &mopts).unwrap();
     let x: Vec<Point3> = db
         .control_points()
         .iter()
@@ -125,7 +126,10 @@ fn gmsh_grid_on_the_imported_m6_matches_central_differences() {
     let copts = surfgrid::ClassifyOptions { rel_tol: 1e-5 };
     let (grid, _) = surfgrid::classify_wall(&db, &mesh, &wall, &copts).unwrap();
     for s in [0.0, 1.0] {
-        let o = check(&db, &grid, s, 3e-3);
+        // the IGES's own gaps (a corner lies 5.9e-5, 1.8e-6 of the model, off a surface at
+        // the baseline; 3.6e-4 once moved: the imported model has no live junction) are not
+        // what is tested here
+        let o = check(&db, &grid, s, 3e-3, 1e-3);
         assert!(o.remapped > 0 || s == 0.0);
         assert!(o.rel < 1e-6, "relative error {:.3e}", o.rel);
         assert!(o.dot_rel < 1e-10, "dot-product test {:.3e}", o.dot_rel);
@@ -147,7 +151,7 @@ fn generated_grid_with_a_moving_junction_matches_central_differences() {
     // h = 3e-4 (1.7e-6 there, 3.7e-4 at 1e-6) and a changed smoothing decision from
     // h = 1e-3 (3.5e-4); h = 6e-4 gives 6.3e-7. Without smoothing h = 3e-3 gives 2e-7.
     for (s, h) in [(0.0, 3e-3), (1.0, 3e-3), (6.0, 6e-4)] {
-        let o = check(&db, &g, s, h);
+        let o = check(&db, &g, s, h, ModelOptions::default().junction_rel_tol);
         assert!(o.remapped >= 2 || s == 0.0);
         assert!(o.smoothed > 0 || s < 6.0, "the large change smooths");
         assert!(o.rel < 1e-6, "relative error {:.3e}", o.rel);
