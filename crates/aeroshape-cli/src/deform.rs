@@ -197,17 +197,16 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     if args.rigid.is_empty() && (args.rotate_deg != 0.0 || args.translate != [0.0; 3]) {
         bail!("--rotate-deg/--translate need a marker to move: give --rigid MARKER");
     }
+    let mut request = request(&args);
+    #[cfg(feature = "mpi")]
+    if crate::deform_mpi::launched() {
+        return crate::deform_mpi::run(&args, request);
+    }
     let bar = progress_bar();
     let t = Instant::now();
     bar_msg(&bar, "reading");
     let m = mesh::io::read_path(&args.mesh)?;
     let read = t.elapsed().as_secs_f64();
-    let motion = RigidMotion {
-        angle_deg: args.rotate_deg,
-        axis_point: args.axis_point,
-        axis_dir: args.axis_dir,
-        translation: args.translate,
-    };
     let geometry = match &args.geometry {
         Some(p) => {
             let text = std::fs::read_to_string(p).with_context(|| format!("{}", p.display()))?;
@@ -218,25 +217,9 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let displacements = match &args.displacements {
-        Some(p) => read_displacements(p, m.n_nodes())?,
-        None => Vec::new(),
-    };
-    let mut request = deform::Request {
-        rigid: args.rigid.clone(),
-        motion,
-        displacements,
-        slide: args.slide.clone(),
-        fixed: args.fixed.clone(),
-        solver: args.solver,
-        stiffness: args.stiffness,
-        adapt_rotation: !args.no_rotation,
-        rel_tol: args.tolerance,
-        allow_inverted: args.allow_inverted,
-    };
     // a node of a fixed marker (named by --fixed or by nothing) never moves, even where the
     // marker meets a sliding one
-    aeroshape::precedence::hold_fixed_nodes(&m, &mut request);
+    add_displacements(&args, &m, &mut request)?;
     let mut progress = |phase: &str, done: usize, total: usize| {
         if let Some(b) = &bar {
             b.set_message(format!("{phase} ({done}/{total} increments)"));
@@ -317,6 +300,45 @@ fn print_summary(r: &deform::DeformReport, output: &Path) -> std::io::Result<()>
         r.quality_after.n_nonpositive
     );
     outln!("wrote {}", output.display());
+    Ok(())
+}
+
+/// The request of the flags: markers, motion, solver options. Its displacements (which need
+/// the grid) are left empty; [`add_displacements`] puts them in.
+pub(crate) fn request(args: &DeformArgs) -> deform::Request {
+    deform::Request {
+        rigid: args.rigid.clone(),
+        motion: RigidMotion {
+            angle_deg: args.rotate_deg,
+            axis_point: args.axis_point,
+            axis_dir: args.axis_dir,
+            translation: args.translate,
+        },
+        displacements: Vec::new(),
+        slide: args.slide.clone(),
+        fixed: args.fixed.clone(),
+        solver: args.solver,
+        stiffness: args.stiffness,
+        adapt_rotation: !args.no_rotation,
+        rel_tol: args.tolerance,
+        allow_inverted: args.allow_inverted,
+    }
+}
+
+/// Puts into `request` the per-node displacements on `m`: those of `--displacements`, then
+/// a zero displacement for every node of a fixed marker (named by `--fixed` or by nothing)
+/// that meets a sliding one and that no line gives
+/// ([`aeroshape::precedence::hold_fixed_nodes`]), so that such a node never moves.
+pub(crate) fn add_displacements(
+    args: &DeformArgs,
+    m: &mesh::Mesh,
+    request: &mut deform::Request,
+) -> anyhow::Result<()> {
+    request.displacements = match &args.displacements {
+        Some(p) => read_displacements(p, m.n_nodes())?,
+        None => Vec::new(),
+    };
+    aeroshape::precedence::hold_fixed_nodes(m, request);
     Ok(())
 }
 

@@ -23,6 +23,8 @@ macro_rules! outln {
 
 mod case;
 mod deform;
+#[cfg(feature = "mpi")]
+mod deform_mpi;
 mod geom;
 mod geom_import;
 mod gradient;

@@ -163,6 +163,16 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// A distributed deformation (`deform::distributed`, feature `mpi`) cannot go on: a bad
+    /// partition (missing ghost, inconsistent global ids) or an option it does not support.
+    /// Every rank returns it (the ranks agree on errors before any blocking exchange).
+    #[error("distributed deformation: rank {rank}: {reason}")]
+    Distributed {
+        /// The rank that found the fault.
+        rank: i32,
+        /// What is wrong, naming the node (global id) or option.
+        reason: String,
+    },
 }
 
 impl Error {

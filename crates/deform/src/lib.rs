@@ -38,6 +38,8 @@
 mod assembly;
 pub mod bc;
 pub mod deformer;
+#[cfg(feature = "mpi")]
+pub mod distributed;
 pub mod error;
 pub mod generate;
 mod guard;

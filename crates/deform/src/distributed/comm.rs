@@ -1,0 +1,112 @@
+//! The collective operations the distributed deformation uses, over rsmpi: all-reduced sums,
+//! maxima and minima, the agreement on errors that precedes every blocking exchange, and the
+//! variable all-to-all of integer and float lists.
+
+use mpi::collective::SystemOperation;
+use mpi::datatype::{Equivalence, Partition, PartitionMut};
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+use crate::error::{Error, Result};
+
+/// The communicator type of [`crate::distributed`] (the world, or any communicator made
+/// from it by `split` or `duplicate`).
+pub type Comm = SimpleCommunicator;
+
+/// Σ over the ranks.
+pub(crate) fn sum(comm: &Comm, x: f64) -> f64 {
+    let mut out = 0.0;
+    comm.all_reduce_into(&x, &mut out, SystemOperation::sum());
+    out
+}
+
+/// Element-wise Σ over the ranks of a short array.
+pub(crate) fn sum_n<const N: usize>(comm: &Comm, x: [f64; N]) -> [f64; N] {
+    let mut out = [0.0; N];
+    comm.all_reduce_into(&x[..], &mut out[..], SystemOperation::sum());
+    out
+}
+
+/// Σ over the ranks of a count.
+pub(crate) fn sum_u64(comm: &Comm, x: u64) -> u64 {
+    let mut out = 0u64;
+    comm.all_reduce_into(&x, &mut out, SystemOperation::sum());
+    out
+}
+
+/// max over the ranks.
+pub(crate) fn max(comm: &Comm, x: f64) -> f64 {
+    let mut out = 0.0;
+    comm.all_reduce_into(&x, &mut out, SystemOperation::max());
+    out
+}
+
+/// min over the ranks.
+pub(crate) fn min(comm: &Comm, x: f64) -> f64 {
+    let mut out = 0.0;
+    comm.all_reduce_into(&x, &mut out, SystemOperation::min());
+    out
+}
+
+/// The ranks agree on `local`: when any rank failed, every rank returns the error of the
+/// lowest failing rank (its message broadcast from it), so that no rank goes on into an
+/// exchange that the others will not join.
+pub(crate) fn agree<T>(comm: &Comm, local: Result<T>) -> Result<T> {
+    let me = comm.rank();
+    let mine = if local.is_err() { me } else { i32::MAX };
+    let mut first = i32::MAX;
+    comm.all_reduce_into(&mine, &mut first, SystemOperation::min());
+    if first == i32::MAX {
+        return local;
+    }
+    let mut text: Vec<u8> = match &local {
+        Err(Error::Distributed { reason, .. }) if me == first => reason.clone().into_bytes(),
+        Err(e) if me == first => e.to_string().into_bytes(),
+        _ => Vec::new(),
+    };
+    let mut len = text.len() as u64;
+    let root = comm.process_at_rank(first);
+    root.broadcast_into(&mut len);
+    text.resize(len as usize, 0);
+    root.broadcast_into(&mut text[..]);
+    if me == first {
+        // The rank that failed keeps its own error (its type and fields).
+        return local;
+    }
+    Err(Error::Distributed {
+        rank: first,
+        reason: String::from_utf8_lossy(&text).into_owned(),
+    })
+}
+
+/// Sends `out[r]` to rank r and returns what each rank sent here (`in[r]` from rank r).
+pub(crate) fn all_to_all<T: Equivalence + Copy + Default>(
+    comm: &Comm,
+    out: &[Vec<T>],
+) -> Vec<Vec<T>> {
+    let p = comm.size() as usize;
+    let counts: Vec<i32> = out.iter().map(|v| v.len() as i32).collect();
+    let mut rcounts = vec![0i32; p];
+    comm.all_to_all_into(&counts[..], &mut rcounts[..]);
+    let displs = |c: &[i32]| -> Vec<i32> {
+        c.iter()
+            .scan(0, |a, &x| {
+                let d = *a;
+                *a += x;
+                Some(d)
+            })
+            .collect()
+    };
+    let (sd, rd) = (displs(&counts), displs(&rcounts));
+    let flat: Vec<T> = out.iter().flatten().copied().collect();
+    let total: usize = rcounts.iter().map(|&c| c as usize).sum();
+    let mut buf = vec![T::default(); total];
+    {
+        let send = Partition::new(&flat[..], &counts[..], &sd[..]);
+        let mut recv = PartitionMut::new(&mut buf[..], &rcounts[..], &rd[..]);
+        comm.all_to_all_varcount_into(&send, &mut recv);
+    }
+    (0..p)
+        .map(|r| buf[rd[r] as usize..(rd[r] + rcounts[r]) as usize].to_vec())
+        .collect()
+}

@@ -1,0 +1,479 @@
+//! The distributed deformation ([`Deformer`]): a rank's unknowns (owned first, ghosts after,
+//! by owner), the increments of the motion with the serial guard's rule (1, 2, 4, …
+//! increments until no cell is inverted and the minimum quality holds), each one assembling
+//! Eq. 21 on the rank's cells, solving R (Eq. 26) and the spring system over the ranks, and
+//! bringing the ghosts' new positions from their owners; the result gathered on rank 0.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use mesh::Mesh;
+use mpi::datatype::PartitionMut;
+use mpi::traits::*;
+use serde::Serialize;
+use sparse::{Constraints, V3};
+
+use super::comm::{Comm, agree, max, min, sum_u64};
+use super::halo::Halo;
+use super::partition::{LocalGrid, Partition};
+use super::rfield::{Ctx, rotations};
+use super::scatter::Local;
+use super::solve::DistOperator;
+use crate::assembly::{System, rhs};
+use crate::bc::{BoundaryConditions, NodeRole};
+use crate::error::{Error, Result};
+use crate::operator::check_converged;
+use crate::options::{DeformOptions, SolverKind};
+use crate::stiffness::{Stiffness, springs};
+
+/// What a distributed deformation did (the same figures on every rank).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct DistReport {
+    /// Ranks.
+    pub ranks: usize,
+    /// Nodes over the ranks.
+    pub nodes: u64,
+    /// Unknowns over the ranks.
+    pub unknowns: u64,
+    /// Ghost nodes over the ranks (the partition surface, counted on the receiving side).
+    pub ghost_nodes: u64,
+    /// Increments of the last attempt and the increment counts tried.
+    pub increments: usize,
+    /// The increment counts tried.
+    pub attempts: Vec<usize>,
+    /// PCG iterations of the spring system (Eq. 21), summed over the increments.
+    pub iterations: usize,
+    /// PCG iterations of the R field (Eq. 26), summed over the increments.
+    pub rotation_iterations: usize,
+    /// Largest final relative residual of the Eq. 21 solves.
+    pub residual: f64,
+    /// Bytes sent by all ranks in one halo exchange of the unknowns (one product A p).
+    pub bytes_per_iteration: u64,
+    /// Minimum cell quality before and after.
+    pub min_quality: [f64; 2],
+    /// Cells with q ≤ 0 before and after.
+    pub nonpositive: [u64; 2],
+    /// Largest seconds over the ranks: set-up (partition checks, unknowns), assembly and
+    /// preconditioner, R field, spring solve, quality.
+    pub seconds: DistSeconds,
+}
+
+/// Seconds per phase (largest over the ranks).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct DistSeconds {
+    /// Unknowns and halo of the unknowns.
+    pub setup: f64,
+    /// Springs, assembly, block preconditioner.
+    pub assemble: f64,
+    /// The R field.
+    pub rotation: f64,
+    /// The Eq. 21 solve.
+    pub solve: f64,
+    /// Quality.
+    pub quality: f64,
+}
+
+/// A rank's result: the new coordinates of its local nodes (owned, then ghosts) and the
+/// report.
+#[derive(Debug, Clone)]
+pub struct DistDeformed {
+    /// New coordinates of the local nodes.
+    pub coords: Vec<[f64; 3]>,
+    /// What was done.
+    pub report: DistReport,
+}
+
+/// The distributed deformation set-up on a communicator.
+pub struct Deformer<'c> {
+    comm: &'c Comm,
+    local: Local,
+    opts: DeformOptions,
+    sys: System,
+    /// Local node of every local unknown (owned unknowns, then ghost unknowns).
+    unk_node: Vec<u32>,
+    unk_halo: Halo,
+    setup: f64,
+}
+
+/// The cells of the local grid this rank counts (those whose smallest global node id it
+/// owns: each cell is counted once over the ranks).
+fn counted_cells(part: &Partition) -> Mesh {
+    let g = &part.grid;
+    let me = part.owner.first().copied().unwrap_or(0);
+    let mut m = Mesh::new(g.mesh.dim);
+    for (kind, e) in g.mesh.cells.iter() {
+        let lowest = e
+            .iter()
+            .min_by_key(|&&v| g.global_ids[v as usize])
+            .map(|&v| v as usize);
+        if lowest.is_some_and(|v| v < g.n_owned && part.owner[v] == me) {
+            m.cells.push(kind, e, None);
+        }
+    }
+    m
+}
+
+impl<'c> Deformer<'c> {
+    /// The set-up on a partition given by the caller (each rank its own part, as a CFD
+    /// solver has it): `bc` names markers of the local grids (rigid or fixed) and node
+    /// displacements in local numbering. Collective.
+    pub fn new(
+        comm: &'c Comm,
+        grid: LocalGrid,
+        bc: &BoundaryConditions,
+        opts: &DeformOptions,
+    ) -> Result<Self> {
+        check_options(comm, opts)?;
+        let t = Instant::now();
+        let local = Local::given(comm, grid, bc, opts)?;
+        Self::set_up(comm, local, opts, t)
+    }
+
+    /// The set-up from the whole grid on rank 0 (`whole`: `Some` on rank 0, `None` on the
+    /// others), partitioned there by coordinate bisection and scattered; the boundary
+    /// conditions are those of the serial [`crate::deform`]. Collective.
+    pub fn from_root(
+        comm: &'c Comm,
+        whole: Option<(&Mesh, &BoundaryConditions)>,
+        opts: &DeformOptions,
+    ) -> Result<Self> {
+        check_options(comm, opts)?;
+        let t = Instant::now();
+        let local = Local::from_root(comm, whole, opts)?;
+        Self::set_up(comm, local, opts, t)
+    }
+
+    fn set_up(comm: &'c Comm, local: Local, opts: &DeformOptions, t: Instant) -> Result<Self> {
+        let part = &local.part;
+        let (n, n_owned) = (part.grid.mesh.n_nodes(), part.grid.n_owned);
+        let is_unk = |i: usize| {
+            matches!(
+                local.cls.roles[i],
+                NodeRole::Free | NodeRole::Sliding(_) | NodeRole::OnSupport(_)
+            ) && !part.adj.neighbours(i).is_empty()
+        };
+        let node_of: Vec<u32> = (0..n_owned)
+            .filter(|&i| is_unk(i))
+            .map(|i| i as u32)
+            .collect();
+        let mut ghost: Vec<u32> = (n_owned..n)
+            .filter(|&i| is_unk(i))
+            .map(|i| i as u32)
+            .collect();
+        let key = |i: &u32| (part.owner[*i as usize], part.grid.global_ids[*i as usize]);
+        ghost.sort_unstable_by_key(key);
+        let mut unk_of = vec![u32::MAX; n];
+        let unk_node: Vec<u32> = node_of.iter().chain(&ghost).copied().collect();
+        for (k, &i) in unk_node.iter().enumerate() {
+            unk_of[i as usize] = k as u32;
+        }
+        let items = node_of
+            .iter()
+            .enumerate()
+            .filter_map(|(k, &i)| match local.cls.roles[i as usize] {
+                NodeRole::Sliding(c) => Some((k as u32, c)),
+                _ => None,
+            })
+            .collect();
+        let ghosts: Vec<(u32, i32, u64)> = ghost
+            .iter()
+            .map(|&i| {
+                let (o, g) = key(&i);
+                (unk_of[i as usize], o, g)
+            })
+            .collect();
+        let owned: HashMap<u64, u32> = node_of
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| (part.grid.global_ids[i as usize], k as u32))
+            .collect();
+        let unk_halo = agree(comm, Halo::build(comm, &ghosts, &owned))?;
+        let sys = System {
+            unk_of,
+            node_of,
+            cons: Constraints { items },
+            sup_unk: Vec::new(),
+        };
+        let setup = max(comm, t.elapsed().as_secs_f64());
+        Ok(Self {
+            comm,
+            local,
+            opts: *opts,
+            sys,
+            unk_node,
+            unk_halo,
+            setup,
+        })
+    }
+
+    /// This rank's partition.
+    pub fn partition(&self) -> &Partition {
+        &self.local.part
+    }
+
+    /// Minimum quality and count of q ≤ 0 over the ranks at the local coordinates `x`.
+    fn quality(&self, cells: &Mesh, x: &[[f64; 3]]) -> (f64, u64) {
+        let q = mesh::quality::cell_quality_at(cells, x);
+        let s = mesh::quality::summary(&q);
+        let lo = if s.measured > 0 { s.min } else { f64::INFINITY };
+        (
+            min(self.comm, lo),
+            sum_u64(self.comm, s.n_nonpositive as u64),
+        )
+    }
+
+    /// Deforms the grid for the prescribed motion of the set-up (collective).
+    pub fn deform(&self) -> Result<DistDeformed> {
+        let (comm, opts, part) = (self.comm, &self.opts, &self.local.part);
+        let x0 = &part.grid.mesh.coords;
+        let mut rep = DistReport {
+            ranks: comm.size() as usize,
+            nodes: part.n_global,
+            unknowns: sum_u64(comm, self.sys.node_of.len() as u64),
+            ghost_nodes: sum_u64(comm, (x0.len() - part.grid.n_owned) as u64),
+            bytes_per_iteration: sum_u64(comm, self.unk_halo.bytes_sent(3) as u64),
+            ..DistReport::default()
+        };
+        rep.seconds.setup = self.setup;
+        let t = Instant::now();
+        let cells = counted_cells(part);
+        let (min0, bad0) = self.quality(&cells, x0);
+        rep.seconds.quality += t.elapsed().as_secs_f64();
+        let mut inc = 1usize;
+        loop {
+            rep.attempts.push(inc);
+            let mut cur = x0.clone();
+            let (mut iterations, mut rot_iterations, mut residual) = (0, 0, 0.0f64);
+            for m in 1..=inc {
+                let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
+                let o = self.increment(s, &mut cur, &mut rep.seconds)?;
+                iterations += o.0;
+                rot_iterations += o.1;
+                residual = residual.max(o.2);
+            }
+            let t = Instant::now();
+            let (min1, bad1) = self.quality(&cells, &cur);
+            rep.seconds.quality += t.elapsed().as_secs_f64();
+            let low = min1 < opts.min_quality_ratio * min0;
+            if (bad1 > bad0 || low) && inc < opts.max_increments {
+                inc *= 2;
+                continue;
+            }
+            if bad1 > bad0 && !opts.allow_inverted {
+                return Err(Error::Inverted {
+                    count: bad1 as usize,
+                    increments: inc,
+                    worst: format!("min quality {min1:.3e} over the ranks"),
+                });
+            }
+            rep.increments = inc;
+            rep.iterations = iterations;
+            rep.rotation_iterations = rot_iterations;
+            rep.residual = max(comm, residual);
+            rep.min_quality = [min0, min1];
+            rep.nonpositive = [bad0, bad1];
+            let s = &mut rep.seconds;
+            [s.assemble, s.rotation, s.solve, s.quality] =
+                [s.assemble, s.rotation, s.solve, s.quality].map(|v| max(comm, v));
+            return Ok(DistDeformed {
+                coords: cur,
+                report: rep,
+            });
+        }
+    }
+
+    /// One increment to the fraction `s` of the motion, from `cur` (local nodes, ghosts
+    /// up to date); returns the Eq. 21 and Eq. 26 iterations and the final residual.
+    fn increment(
+        &self,
+        s: f64,
+        cur: &mut [[f64; 3]],
+        sec: &mut DistSeconds,
+    ) -> Result<(usize, usize, f64)> {
+        let (comm, opts, part, sys) = (self.comm, &self.opts, &self.local.part, &self.sys);
+        let cls = &self.local.cls;
+        let x0 = &part.grid.mesh.coords;
+        let mut target = cur.to_vec();
+        let mut max_disp = 0.0f64;
+        for i in 0..cur.len() {
+            let t = match cls.roles[i] {
+                NodeRole::Rigid(m) => cls.motions[m].apply(x0[i], s),
+                NodeRole::Displaced(k) => {
+                    let d = self.local.disp[k];
+                    if s == 1.0 {
+                        [x0[i][0] + d[0], x0[i][1] + d[1], x0[i][2] + d[2]]
+                    } else {
+                        [
+                            x0[i][0] + s * d[0],
+                            x0[i][1] + s * d[1],
+                            x0[i][2] + s * d[2],
+                        ]
+                    }
+                }
+                _ => continue,
+            };
+            target[i] = t;
+            let d = [t[0] - cur[i][0], t[1] - cur[i][1], t[2] - cur[i][2]];
+            max_disp = max_disp.max((d[0].powi(2) + d[1].powi(2) + d[2].powi(2)).sqrt());
+        }
+        let max_disp = max(comm, max_disp);
+        if max_disp == 0.0 {
+            return Ok((0, 0, 0.0));
+        }
+        let t = Instant::now();
+        let sp = springs(&part.grid.mesh, cur, opts.stiffness, &part.adj, &[], None);
+        let op = DistOperator::new(sys, &part.adj, &sp, sys.node_of.len(), opts);
+        let op = agree(comm, op)?;
+        sec.assemble += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let ctx = Ctx {
+            comm,
+            node_halo: &part.halo,
+            unk_halo: &self.unk_halo,
+            sys,
+            n_all: self.unk_node.len(),
+            n_owned_nodes: part.grid.n_owned,
+            skin: &cls.skin,
+            dim: part.grid.mesh.dim,
+            opts,
+        };
+        let rf = rotations(&ctx, &op, cur, &target)?;
+        sec.rotation += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let a = op.matrix();
+        let cur_ref: &[[f64; 3]] = cur;
+        let unk_node = &self.unk_node;
+        let disp = |j: usize| {
+            let (t, c) = (target[j], cur_ref[j]);
+            [t[0] - c[0], t[1] - c[1], t[2] - c[2]]
+        };
+        let mut b = rhs(sys, &op.couplings, disp, |k, i| {
+            let mut s = [0.0; 3];
+            if !rf.any {
+                return s;
+            }
+            let (cols, vals) = a.row(k);
+            for (&c, &akl) in cols.iter().zip(vals) {
+                let r = rf.minus_identity(i, unk_node[c as usize] as usize, cur_ref);
+                for q in 0..3 {
+                    s[q] += f64::from(akl) * r[q];
+                }
+            }
+            let (nodes, kij) = op.couplings.row(k);
+            for (&j, &kij) in nodes.iter().zip(kij) {
+                let r = rf.minus_identity(i, j as usize, cur_ref);
+                for q in 0..3 {
+                    s[q] -= kij * r[q];
+                }
+            }
+            s
+        });
+        if part.grid.mesh.dim == 2 {
+            for v in b.iter_mut() {
+                v[2] = 0.0;
+            }
+        }
+        sec.assemble += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let mut dx: Vec<V3> = vec![[0.0; 3]; sys.node_of.len()];
+        let r = op.solve(
+            comm,
+            &self.unk_halo,
+            self.unk_node.len(),
+            &b,
+            &mut dx,
+            &sys.cons,
+            opts,
+            opts.rel_tol,
+        );
+        check_converged(&r, "spring system (Eq. 21)", opts)?;
+        for (k, &i) in sys.node_of.iter().enumerate() {
+            for q in 0..3 {
+                cur[i as usize][q] += dx[k][q];
+            }
+        }
+        for i in 0..cur.len() {
+            if matches!(cls.roles[i], NodeRole::Rigid(_) | NodeRole::Displaced(_)) {
+                cur[i] = target[i];
+            }
+        }
+        part.halo.exchange(comm, cur);
+        sec.solve += t.elapsed().as_secs_f64();
+        Ok((r.iterations, rf.iterations, r.rel_residual))
+    }
+
+    /// The owned nodes' coordinates of every rank, gathered on rank 0 in global-id order
+    /// (`None` on the other ranks). Collective.
+    pub fn gather(&self, coords: &[[f64; 3]]) -> Option<Vec<[f64; 3]>> {
+        let (comm, part) = (self.comm, &self.local.part);
+        let no = part.grid.n_owned;
+        let gids: Vec<u64> = part.grid.global_ids[..no].to_vec();
+        let xs: Vec<f64> = coords[..no].iter().flatten().copied().collect();
+        let root = comm.process_at_rank(0);
+        let mut counts = vec![0i32; comm.size() as usize];
+        if comm.rank() == 0 {
+            root.gather_into_root(&(no as i32), &mut counts[..]);
+        } else {
+            root.gather_into(&(no as i32));
+        }
+        if comm.rank() != 0 {
+            root.gather_varcount_into(&gids[..]);
+            root.gather_varcount_into(&xs[..]);
+            return None;
+        }
+        let displs = |w: i32| -> (Vec<i32>, Vec<i32>) {
+            let c: Vec<i32> = counts.iter().map(|&c| c * w).collect();
+            let d = c
+                .iter()
+                .scan(0, |a, &x| {
+                    let d = *a;
+                    *a += x;
+                    Some(d)
+                })
+                .collect();
+            (c, d)
+        };
+        let total: usize = counts.iter().map(|&c| c as usize).sum();
+        let mut all_g = vec![0u64; total];
+        let mut all_x = vec![0.0f64; 3 * total];
+        let (c1, d1) = displs(1);
+        root.gather_varcount_into_root(
+            &gids[..],
+            &mut PartitionMut::new(&mut all_g[..], &c1[..], &d1[..]),
+        );
+        let (c3, d3) = displs(3);
+        root.gather_varcount_into_root(
+            &xs[..],
+            &mut PartitionMut::new(&mut all_x[..], &c3[..], &d3[..]),
+        );
+        let mut out = vec![[0.0; 3]; total];
+        for (k, &g) in all_g.iter().enumerate() {
+            out[g as usize] = [all_x[3 * k], all_x[3 * k + 1], all_x[3 * k + 2]];
+        }
+        Some(out)
+    }
+}
+
+/// Refuses, on every rank alike, the options the distributed deformation does not have.
+fn check_options(comm: &Comm, opts: &DeformOptions) -> Result<()> {
+    let reason = if !matches!(
+        opts.stiffness,
+        Stiffness::InverseLength | Stiffness::InverseLengthSquared
+    ) {
+        Some(format!(
+            "stiffness {} needs grid-wide fields (mean volume, wall distance); use inverse-length or inverse-length2",
+            opts.stiffness
+        ))
+    } else if opts.solver == SolverKind::PointIteration {
+        Some("the point iteration (jacobi) is not distributed; use pcg or pcg-jacobi".into())
+    } else {
+        None
+    };
+    match reason {
+        Some(reason) => Err(Error::Distributed {
+            rank: comm.rank(),
+            reason,
+        }),
+        None => Ok(()),
+    }
+}

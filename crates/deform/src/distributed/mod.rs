@@ -1,0 +1,40 @@
+//! Distributed deformation over MPI (feature `mpi`): the grid that lives on the ranks of an
+//! MPI job deforms where it lives. See docs/mpi.md and docs/crates/deform.md, "Distributed".
+//!
+//! - [`partition`]: a rank's part of the grid ([`LocalGrid`]: owned nodes with global ids,
+//!   then ghosts, and the cells around the owned nodes) and its validated form
+//!   ([`Partition`]: one owner per node, ghost layer complete, node halo built once); a bad
+//!   part gives the same error on every rank, never a hang.
+//! - [`rcb`]: recursive coordinate bisection, and the parts of a whole grid on rank 0.
+//! - `scatter`: each rank's share of the problem (its part and the roles of its nodes),
+//!   given by the caller or made on rank 0 and sent.
+//! - `halo`: the non-blocking exchange of ghost values; `comm`: the all-reduces, the
+//!   agreement on errors and the variable all-to-all.
+//! - `solve`: Eq. 21's rows on each rank (deform's own assembly), the product overlapped
+//!   with the halo exchange, PCG with all-reduced dots and a block preconditioner of
+//!   per-rank multigrid; `rfield`: the R field (Eqs. 25–26) over the ranks.
+//! - [`deformer`]: [`Deformer`] (takes a communicator), the increments and the quality
+//!   guard with all-reduced counts, the gather on rank 0.
+
+mod comm;
+pub mod deformer;
+mod halo;
+pub mod partition;
+pub mod rcb;
+mod rfield;
+mod scatter;
+mod solve;
+
+pub use comm::Comm;
+pub use deformer::{Deformer, DistDeformed, DistReport, DistSeconds};
+/// The MPI bindings (rsmpi) the distributed deformation is built on, for the caller's
+/// `mpi::initialize()` and communicators.
+pub use mpi;
+pub use partition::{LocalGrid, Partition};
+pub use rcb::rcb;
+
+/// True on every rank when `ok` is true on every rank (collective): how a caller makes the
+/// ranks agree on a failure of its own (a file rank 0 could not read) before it goes on.
+pub fn all_ok(comm: &Comm, ok: bool) -> bool {
+    comm::min(comm, f64::from(u8::from(ok))) > 0.0
+}

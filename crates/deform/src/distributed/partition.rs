@@ -1,0 +1,217 @@
+//! One rank's part of a distributed grid ([`LocalGrid`], as a CFD solver hands it over) and
+//! its validated form ([`Partition`]): every node owned by exactly one rank, the global ids
+//! dense, the ghost layer complete (every cell around an owned node is on its owner), and the
+//! node halo built once.
+//!
+//! The checks run before any exchange that could block, and the ranks agree on their outcome
+//! (`comm::agree`): a bad partition gives the same clear error on every rank.
+
+use std::collections::HashMap;
+
+use mesh::{Adjacency, Mesh};
+use mpi::traits::*;
+
+use super::comm::{Comm, agree, all_to_all, sum_u64};
+use super::halo::Halo;
+use crate::error::{Error, Result};
+
+/// One rank's part of a grid: its owned nodes, then its ghost nodes (owned by other ranks),
+/// the cells around its owned nodes, and the boundary elements of its nodes.
+#[derive(Debug, Clone)]
+pub struct LocalGrid {
+    /// The local grid: nodes (owned first, then ghosts), cells, markers (boundary elements
+    /// whose nodes are all local, under the markers' global names).
+    pub mesh: Mesh,
+    /// Global id of every local node: ids run over 0..N, N the total of owned nodes of all
+    /// ranks, and each id is owned by exactly one rank.
+    pub global_ids: Vec<u64>,
+    /// Number of owned nodes: the first `n_owned` nodes of `mesh`.
+    pub n_owned: usize,
+}
+
+/// A validated [`LocalGrid`] with the owner of every ghost node and the node halo.
+pub struct Partition {
+    pub(crate) grid: LocalGrid,
+    /// Owner rank of every local node.
+    pub(crate) owner: Vec<i32>,
+    /// Total number of nodes over the ranks.
+    pub(crate) n_global: u64,
+    /// The node adjacency of the local grid (complete for owned nodes).
+    pub(crate) adj: Adjacency,
+    /// Ghost node values from their owners.
+    pub(crate) halo: Halo,
+}
+
+fn fail(comm: &Comm, reason: String) -> Error {
+    Error::Distributed {
+        rank: comm.rank(),
+        reason,
+    }
+}
+
+impl Partition {
+    /// Checks `grid` against the other ranks' parts and builds the halo (collective: every
+    /// rank of `comm` calls it). Fails on every rank when a part is inconsistent: a global id
+    /// out of range, owned by two ranks or by none, a node listed twice, a cell that names a
+    /// node outside its part, or a missing ghost (a cell around an owned node that is not on
+    /// the owner).
+    pub fn new(comm: &Comm, grid: LocalGrid) -> Result<Self> {
+        let n = grid.mesh.n_nodes();
+        let me = comm.rank();
+        let p = comm.size() as usize;
+        // Local checks.
+        let local = (|| {
+            if grid.global_ids.len() != n || grid.n_owned > n {
+                return Err(fail(
+                    comm,
+                    format!(
+                        "{} global ids and {} owned nodes for {n} local nodes",
+                        grid.global_ids.len(),
+                        grid.n_owned
+                    ),
+                ));
+            }
+            for g in grid.mesh.cells.groups() {
+                if let Some(&v) = g.nodes.iter().find(|&&v| v as usize >= n) {
+                    return Err(fail(
+                        comm,
+                        format!(
+                            "a {:?} cell names local node {v} (the part has {n} nodes)",
+                            g.kind
+                        ),
+                    ));
+                }
+            }
+            let mut local_of = HashMap::with_capacity(n);
+            for (i, &g) in grid.global_ids.iter().enumerate() {
+                if let Some(j) = local_of.insert(g, i as u32) {
+                    return Err(fail(
+                        comm,
+                        format!("node {g} (global id) is listed twice (local nodes {j} and {i})"),
+                    ));
+                }
+            }
+            Ok(local_of)
+        })();
+        let local_of = agree(comm, local)?;
+        let n_global = sum_u64(comm, grid.n_owned as u64);
+        let range = match grid.global_ids.iter().find(|&&g| g >= n_global) {
+            Some(g) => Err(fail(
+                comm,
+                format!("node {g} (global id) is out of range: the ranks own {n_global} nodes"),
+            )),
+            None => Ok(()),
+        };
+        agree(comm, range)?;
+        // Directory of owners: global id g is registered on rank g mod p.
+        let mut reg: Vec<Vec<u64>> = vec![Vec::new(); p];
+        for &g in &grid.global_ids[..grid.n_owned] {
+            reg[(g % p as u64) as usize].push(g);
+        }
+        let got = all_to_all(comm, &reg);
+        let mut dir: HashMap<u64, i32> = HashMap::new();
+        let mut dup = Ok(());
+        for (r, gs) in got.iter().enumerate() {
+            for &g in gs {
+                if let Some(r0) = dir.insert(g, r as i32) {
+                    dup = Err(fail(
+                        comm,
+                        format!("node {g} (global id) is owned by ranks {r0} and {r}"),
+                    ));
+                }
+            }
+        }
+        agree(comm, dup)?;
+        // Owners of the ghosts, from the directory.
+        let mut ask: Vec<Vec<u64>> = vec![Vec::new(); p];
+        for &g in &grid.global_ids[grid.n_owned..] {
+            ask[(g % p as u64) as usize].push(g);
+        }
+        let asked = all_to_all(comm, &ask);
+        let answers: Vec<Vec<i32>> = asked
+            .iter()
+            .map(|gs| {
+                gs.iter()
+                    .map(|g| dir.get(g).copied().unwrap_or(-1))
+                    .collect()
+            })
+            .collect();
+        let answered = all_to_all(comm, &answers);
+        let mut owner = vec![me; n];
+        let mut at = vec![0usize; p];
+        let mut orphan = Ok(());
+        for i in grid.n_owned..n {
+            let g = grid.global_ids[i];
+            let d = (g % p as u64) as usize;
+            let o = answered[d][at[d]];
+            at[d] += 1;
+            if o < 0 || o == me {
+                orphan = Err(fail(
+                    comm,
+                    format!(
+                        "ghost node {g} (global id, local {i}) has no owner among the other ranks"
+                    ),
+                ));
+            }
+            owner[i] = o;
+        }
+        agree(comm, orphan)?;
+        // The ghost layer: every edge a rank has at a ghost node must be on the node's owner.
+        let adj = Adjacency::try_build(&grid.mesh).map_err(|e| fail(comm, e.to_string()));
+        let adj = agree(comm, adj)?;
+        let mut edges: Vec<Vec<u64>> = vec![Vec::new(); p];
+        for i in grid.n_owned..n {
+            for &j in adj.neighbours(i) {
+                let e = &mut edges[owner[i] as usize];
+                e.push(grid.global_ids[i]);
+                e.push(grid.global_ids[j as usize]);
+            }
+        }
+        let edges = all_to_all(comm, &edges);
+        let mut missing = Ok(());
+        'outer: for (r, e) in edges.iter().enumerate() {
+            for pair in e.chunks_exact(2) {
+                let (gi, gj) = (pair[0], pair[1]);
+                let i = local_of[&gi] as usize;
+                let has = local_of
+                    .get(&gj)
+                    .is_some_and(|&j| adj.neighbours(i).binary_search(&j).is_ok());
+                if !has {
+                    missing = Err(fail(
+                        comm,
+                        format!(
+                            "missing ghost: rank {r} has the edge from node {gi} to node {gj} (global ids), \
+                             but rank {me}, the owner of node {gi}, has not (a cell around an owned node is missing)"
+                        ),
+                    ));
+                    break 'outer;
+                }
+            }
+        }
+        agree(comm, missing)?;
+        let ghosts: Vec<(u32, i32, u64)> = (grid.n_owned..n)
+            .map(|i| (i as u32, owner[i], grid.global_ids[i]))
+            .collect();
+        let owned: HashMap<u64, u32> = (0..grid.n_owned)
+            .map(|i| (grid.global_ids[i], i as u32))
+            .collect();
+        let halo = agree(comm, Halo::build(comm, &ghosts, &owned))?;
+        Ok(Self {
+            grid,
+            owner,
+            n_global,
+            adj,
+            halo,
+        })
+    }
+
+    /// The local grid.
+    pub fn grid(&self) -> &LocalGrid {
+        &self.grid
+    }
+
+    /// Total number of nodes over the ranks.
+    pub fn n_global(&self) -> u64 {
+        self.n_global
+    }
+}

@@ -1,0 +1,162 @@
+//! The geometric partitioner: recursive coordinate bisection of the nodes ([`rcb`]), and the
+//! parts of a whole grid cut along it (owned nodes, the cells around them, ghost nodes,
+//! boundary elements), as rank 0 makes them before it scatters them.
+//!
+//! Written here rather than taken from a crate: the METIS bindings need a C build of METIS
+//! (Debian's libmetis-dev and bindgen) for a graph partition whose only use here is a smaller
+//! partition surface; bisection along the longest axis is ~40 lines, deterministic, and
+//! gives surfaces within a small factor of METIS's on the wing grids (docs/mpi.md).
+
+use mesh::{Elements, Marker, Mesh};
+
+use super::partition::LocalGrid;
+
+/// The part (0..parts) of every node: the nodes are split recursively at the median of the
+/// longest side of their bounding box, in proportion to the number of parts on each side
+/// (any number of parts; ties broken by node index, so the result is deterministic).
+pub fn rcb(coords: &[[f64; 3]], parts: usize) -> Vec<u32> {
+    let mut part = vec![0u32; coords.len()];
+    let mut idx: Vec<u32> = (0..coords.len() as u32).collect();
+    split(coords, &mut idx, 0, parts.max(1), &mut part);
+    part
+}
+
+fn split(x: &[[f64; 3]], idx: &mut [u32], first: u32, parts: usize, part: &mut [u32]) {
+    if parts <= 1 || idx.len() <= 1 {
+        for &i in idx.iter() {
+            part[i as usize] = first;
+        }
+        return;
+    }
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for &i in idx.iter() {
+        for k in 0..3 {
+            lo[k] = lo[k].min(x[i as usize][k]);
+            hi[k] = hi[k].max(x[i as usize][k]);
+        }
+    }
+    let axis = (0..3)
+        .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
+        .unwrap_or(0);
+    let left = parts / 2;
+    let cut = idx.len() * left / parts;
+    idx.select_nth_unstable_by(cut, |&a, &b| {
+        x[a as usize][axis]
+            .total_cmp(&x[b as usize][axis])
+            .then(a.cmp(&b))
+    });
+    let (a, b) = idx.split_at_mut(cut);
+    split(x, a, first, left, part);
+    split(x, b, first + left as u32, parts - left, part);
+}
+
+/// The parts of `mesh` for the node partition `part` (`parts` parts): for each, its owned
+/// nodes (increasing global id = node index of `mesh`), then its ghosts (increasing global
+/// id), the cells with an owned node, and the marker elements whose nodes are all local.
+pub fn parts(mesh: &Mesh, part: &[u32], parts: usize) -> Vec<LocalGrid> {
+    let n = mesh.n_nodes();
+    // The cells of each part, by kind (cell indices within the group).
+    let mut cells: Vec<Vec<Vec<usize>>> = vec![vec![Vec::new(); mesh.cells.groups().len()]; parts];
+    for (gk, g) in mesh.cells.groups().iter().enumerate() {
+        for (c, e) in g.iter().enumerate() {
+            let mut seen = [u32::MAX; 8];
+            for (k, &v) in e.iter().enumerate() {
+                let q = part[v as usize];
+                if !seen[..k.min(8)].contains(&q) {
+                    cells[q as usize][gk].push(c);
+                }
+                if k < 8 {
+                    seen[k] = q;
+                }
+            }
+        }
+    }
+    let mut local = vec![u32::MAX; n];
+    (0..parts)
+        .map(|q| {
+            let mut gids: Vec<u64> = (0..n as u64)
+                .filter(|&i| part[i as usize] == q as u32)
+                .collect();
+            let n_owned = gids.len();
+            let mut ghosts = Vec::new();
+            for (gk, g) in mesh.cells.groups().iter().enumerate() {
+                for &c in &cells[q][gk] {
+                    for &v in g.element(c) {
+                        if part[v as usize] != q as u32 {
+                            ghosts.push(v as u64);
+                        }
+                    }
+                }
+            }
+            ghosts.sort_unstable();
+            ghosts.dedup();
+            gids.extend(ghosts);
+            for (k, &g) in gids.iter().enumerate() {
+                local[g as usize] = k as u32;
+            }
+            let mut m = Mesh::new(mesh.dim);
+            m.coords = gids.iter().map(|&g| mesh.coords[g as usize]).collect();
+            for (gk, g) in mesh.cells.groups().iter().enumerate() {
+                for &c in &cells[q][gk] {
+                    let e: Vec<u32> = g.element(c).iter().map(|&v| local[v as usize]).collect();
+                    m.cells.push(g.kind, &e, None);
+                }
+            }
+            for mk in &mesh.markers {
+                let mut el = Elements::new();
+                for (kind, e) in mk.elements.iter() {
+                    if e.iter().all(|&v| local[v as usize] != u32::MAX) {
+                        let e: Vec<u32> = e.iter().map(|&v| local[v as usize]).collect();
+                        el.push(kind, &e, None);
+                    }
+                }
+                m.markers.push(Marker {
+                    name: mk.name.clone(),
+                    tag: mk.tag,
+                    elements: el,
+                });
+            }
+            for &g in &gids {
+                local[g as usize] = u32::MAX;
+            }
+            LocalGrid {
+                mesh: m,
+                global_ids: gids,
+                n_owned,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bisection_balances_parts_and_cut_keeps_every_cell_on_its_nodes_owners() {
+        let m = mesh::generate::box_tets(4, 3, 2, [0.0; 3], [2.0, 1.0, 1.0]);
+        for parts in [1, 2, 3, 5] {
+            let p = rcb(&m.coords, parts);
+            let mut count = vec![0usize; parts];
+            for &q in &p {
+                count[q as usize] += 1;
+            }
+            let (lo, hi) = (count.iter().min().unwrap(), count.iter().max().unwrap());
+            assert!(hi - lo <= 1 + m.n_nodes() / 20, "{parts} parts: {count:?}");
+            let grids = super::parts(&m, &p, parts);
+            let owned: usize = grids.iter().map(|g| g.n_owned).sum();
+            assert_eq!(owned, m.n_nodes());
+            // Every cell is on the part of each of its nodes, with the same global nodes.
+            for g in &grids {
+                for (_, e) in g.mesh.cells.iter() {
+                    let any_owned = e.iter().any(|&v| (v as usize) < g.n_owned);
+                    assert!(any_owned);
+                }
+            }
+            let cells: usize = m.tets().len();
+            let on_parts: usize = grids.iter().map(|g| g.mesh.tets().len()).sum();
+            assert!(on_parts >= cells);
+        }
+    }
+}

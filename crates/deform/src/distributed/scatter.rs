@@ -1,0 +1,277 @@
+//! A rank's share of the deformation problem ([`Local`]): its validated [`Partition`] and
+//! the roles of its nodes (moving, fixed, sliding, free), with the skin elements and rigid
+//! motions they need. Made either by each rank from its own part ([`Local::given`]), or on
+//! rank 0 from the whole grid ([`Local::from_root`]): rank 0 classifies every node as the
+//! serial deformation does, cuts the grid by [`super::rcb`], and sends each rank its part.
+
+use mesh::{ElementKind, Mesh};
+use mpi::traits::*;
+
+use super::comm::{Comm, agree};
+use super::partition::{LocalGrid, Partition};
+use super::rcb::{parts, rcb};
+use crate::bc::{BoundaryConditions, Classified, MarkerRole, NodeRole, RigidMotion, classify};
+use crate::error::{Error, Result};
+use crate::options::DeformOptions;
+use crate::solve::Constraint;
+
+/// A rank's share of the problem.
+pub(crate) struct Local {
+    pub part: Partition,
+    /// Roles of the local nodes; `Displaced(k)` indexes `disp`.
+    pub cls: Classified,
+    /// The prescribed displacements of the local nodes that have one.
+    pub disp: Vec<[f64; 3]>,
+}
+
+impl Local {
+    /// From each rank's own part: the roles come from its own markers (the boundary
+    /// elements of its nodes) and `bc` (node displacements in local numbering). Sliding
+    /// planes need the whole marker for their fit and are refused here.
+    pub fn given(
+        comm: &Comm,
+        grid: LocalGrid,
+        bc: &BoundaryConditions,
+        opts: &DeformOptions,
+    ) -> Result<Self> {
+        let part = Partition::new(comm, grid)?;
+        let cls = (|| {
+            if let Some((name, _)) = bc
+                .markers
+                .iter()
+                .find(|m| m.1 != MarkerRole::Fixed && !matches!(m.1, MarkerRole::Rigid(_)))
+            {
+                return Err(Error::Distributed {
+                    rank: comm.rank(),
+                    reason: format!(
+                        "marker {name}: only rigid and fixed markers are supported on a given partition \
+                         (a sliding plane is fitted to the whole marker: use the partition made on rank 0)"
+                    ),
+                });
+            }
+            classify(&part.grid.mesh, bc, opts.plane_rel_tol, None)
+        })();
+        let cls = agree(comm, cls)?;
+        let disp = bc.displacements.iter().map(|d| d.1).collect();
+        Ok(Self { part, cls, disp })
+    }
+
+    /// From the whole grid on rank 0 (`whole` is read on rank 0 only; the other ranks pass
+    /// None): classification as the serial deformation, cut into `comm.size()` parts by
+    /// coordinate bisection, each part sent to its rank.
+    pub fn from_root(
+        comm: &Comm,
+        whole: Option<(&Mesh, &BoundaryConditions)>,
+        opts: &DeformOptions,
+    ) -> Result<Self> {
+        let root = comm.process_at_rank(0);
+        let p = comm.size() as usize;
+        let mine: Result<Option<(Vec<u64>, Vec<f64>)>> = if comm.rank() == 0 {
+            let made = (|| {
+                let (m, bc) = whole.ok_or_else(|| Error::Distributed {
+                    rank: 0,
+                    reason: "rank 0 was given no grid".into(),
+                })?;
+                let cls = classify(m, bc, opts.plane_rel_tol, None)?;
+                let part = rcb(&m.coords, p);
+                let grids = parts(m, &part, p);
+                let pieces: Vec<(Vec<u64>, Vec<f64>)> =
+                    grids.iter().map(|g| encode(g, &cls, bc)).collect();
+                Ok(pieces)
+            })();
+            // The others wait for their part only when rank 0 has made them.
+            let mut ok = u64::from(made.is_ok());
+            root.broadcast_into(&mut ok);
+            made.map(|mut pieces| {
+                for (r, piece) in pieces.iter().enumerate().skip(1) {
+                    let dest = comm.process_at_rank(r as i32);
+                    dest.send(&[piece.0.len() as u64, piece.1.len() as u64][..]);
+                    dest.send(&piece.0[..]);
+                    dest.send(&piece.1[..]);
+                }
+                Some(pieces.swap_remove(0))
+            })
+        } else {
+            let mut ok = 0u64;
+            root.broadcast_into(&mut ok);
+            if ok == 1 {
+                let mut len = [0u64; 2];
+                root.receive_into(&mut len[..]);
+                let mut ints = vec![0u64; len[0] as usize];
+                let mut floats = vec![0.0f64; len[1] as usize];
+                root.receive_into(&mut ints[..]);
+                root.receive_into(&mut floats[..]);
+                Ok(Some((ints, floats)))
+            } else {
+                Ok(None)
+            }
+        };
+        let (ints, floats) = agree(comm, mine)?.ok_or_else(|| Error::Distributed {
+            rank: 0,
+            reason: "no part received".into(),
+        })?;
+        let (grid, cls, disp) = agree(comm, decode(&ints, &floats))?;
+        let part = Partition::new(comm, grid)?;
+        Ok(Self { part, cls, disp })
+    }
+}
+
+const FREE: u64 = 0;
+const FIXED: u64 = 1;
+const RIGID: u64 = 2;
+const DISPLACED: u64 = 3;
+const PLANE: u64 = 4;
+const LINE: u64 = 5;
+
+/// A part and its nodes' roles as integers and floats (what rank 0 sends).
+fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> (Vec<u64>, Vec<f64>) {
+    let n = g.mesh.n_nodes();
+    let mut ints = vec![n as u64, g.n_owned as u64, u64::from(g.mesh.dim)];
+    let mut floats: Vec<f64> = g.mesh.coords.iter().flatten().copied().collect();
+    ints.extend(&g.global_ids);
+    ints.push(g.mesh.cells.groups().len() as u64);
+    for grp in g.mesh.cells.groups() {
+        ints.push(u64::from(grp.kind.vtk_code()));
+        ints.push(grp.nodes.len() as u64);
+        ints.extend(grp.nodes.iter().map(|&v| u64::from(v)));
+    }
+    // Roles, with a payload of three floats each.
+    let mut disp = 0u64;
+    for &gid in &g.global_ids {
+        let (tag, index, pay) = match cls.roles[gid as usize] {
+            NodeRole::Free | NodeRole::OnSupport(_) => (FREE, 0, [0.0; 3]),
+            NodeRole::Fixed => (FIXED, 0, [0.0; 3]),
+            NodeRole::Rigid(m) => (RIGID, m as u64, [0.0; 3]),
+            NodeRole::Displaced(k) => {
+                disp += 1;
+                (DISPLACED, disp - 1, bc.displacements[k].1)
+            }
+            NodeRole::Sliding(Constraint::Plane(v)) => (PLANE, 0, v),
+            NodeRole::Sliding(Constraint::Line(v)) => (LINE, 0, v),
+        };
+        ints.push(tag);
+        ints.push(index);
+        floats.extend(pay);
+    }
+    ints.push(cls.motions.len() as u64);
+    for m in &cls.motions {
+        floats.push(m.angle_deg);
+        floats.extend(m.axis_point);
+        floats.extend(m.axis_dir);
+        floats.extend(m.translation);
+    }
+    // Skin elements whose nodes are all local, in local numbering.
+    let local: std::collections::HashMap<u64, u32> = g
+        .global_ids
+        .iter()
+        .enumerate()
+        .map(|(i, &gid)| (gid, i as u32))
+        .collect();
+    let skin: Vec<Vec<u32>> = cls
+        .skin
+        .iter()
+        .filter_map(|e| {
+            e.iter()
+                .map(|&v| local.get(&u64::from(v)).copied())
+                .collect()
+        })
+        .collect();
+    ints.push(skin.len() as u64);
+    for e in skin {
+        ints.push(e.len() as u64);
+        ints.extend(e.iter().map(|&v| u64::from(v)));
+    }
+    (ints, floats)
+}
+
+/// The inverse of [`encode`].
+fn decode(ints: &[u64], floats: &[f64]) -> Result<(LocalGrid, Classified, Vec<[f64; 3]>)> {
+    let bad = || Error::Distributed {
+        rank: -1,
+        reason: "malformed part received from rank 0".into(),
+    };
+    let mut i = ints.iter().copied();
+    let mut f = floats.iter().copied();
+    let mut next = || i.next().ok_or_else(bad);
+    let n = next()? as usize;
+    let n_owned = next()? as usize;
+    let dim = next()? as u8;
+    let mut m = Mesh::new(dim);
+    m.coords = (0..n)
+        .map(|_| [f.next(), f.next(), f.next()])
+        .map(|p| Some([p[0]?, p[1]?, p[2]?]))
+        .collect::<Option<_>>()
+        .ok_or_else(bad)?;
+    let global_ids = (0..n).map(|_| next()).collect::<Result<Vec<u64>>>()?;
+    let groups = next()?;
+    for _ in 0..groups {
+        let kind = ElementKind::from_vtk_code(next()? as i64).ok_or_else(bad)?;
+        let len = next()? as usize;
+        let nodes = (0..len)
+            .map(|_| next().map(|v| v as u32))
+            .collect::<Result<Vec<u32>>>()?;
+        for e in nodes.chunks_exact(kind.n_nodes()) {
+            m.cells.push(kind, e, None);
+        }
+    }
+    let mut roles = Vec::with_capacity(n);
+    let mut disp = Vec::new();
+    for _ in 0..n {
+        let (tag, index) = (next()?, next()? as usize);
+        let pay = [f.next(), f.next(), f.next()];
+        let pay = [
+            pay[0].ok_or_else(bad)?,
+            pay[1].ok_or_else(bad)?,
+            pay[2].ok_or_else(bad)?,
+        ];
+        roles.push(match tag {
+            FREE => NodeRole::Free,
+            FIXED => NodeRole::Fixed,
+            RIGID => NodeRole::Rigid(index),
+            DISPLACED => {
+                disp.push(pay);
+                NodeRole::Displaced(index)
+            }
+            PLANE => NodeRole::Sliding(Constraint::Plane(pay)),
+            LINE => NodeRole::Sliding(Constraint::Line(pay)),
+            _ => return Err(bad()),
+        });
+    }
+    let nm = next()?;
+    let mut motions = Vec::new();
+    for _ in 0..nm {
+        let v: Vec<f64> = (0..10)
+            .map(|_| f.next())
+            .collect::<Option<_>>()
+            .ok_or_else(bad)?;
+        motions.push(RigidMotion {
+            angle_deg: v[0],
+            axis_point: [v[1], v[2], v[3]],
+            axis_dir: [v[4], v[5], v[6]],
+            translation: [v[7], v[8], v[9]],
+        });
+    }
+    let ns = next()?;
+    let mut skin = Vec::new();
+    for _ in 0..ns {
+        let len = next()? as usize;
+        skin.push(
+            (0..len)
+                .map(|_| next().map(|v| v as u32))
+                .collect::<Result<Vec<u32>>>()?,
+        );
+    }
+    let grid = LocalGrid {
+        mesh: m,
+        global_ids,
+        n_owned,
+    };
+    let cls = Classified {
+        roles,
+        motions,
+        planes: Vec::new(),
+        skin,
+        supports: Vec::new(),
+    };
+    Ok((grid, cls, disp))
+}
