@@ -9,6 +9,7 @@ mod bench;
 mod chain;
 mod fixtures;
 mod regress;
+mod regress_mpi;
 mod tidy;
 
 use std::path::{Path, PathBuf};

@@ -10,6 +10,7 @@
 //!    otherwise): meshio reads `deformed.vtu` and `deformed.su2` with the same node count
 //!    and coordinates (its MSH reader has no parametric nodes); Gmsh opens `deformed.msh`
 //!    with the node count of `deformed.su2`.
+//! 4. The distributed deformation under `mpirun` (`regress_mpi`; skipped without MPI).
 //!
 //! Fails with one line per drifted quantity: case, name, value, reference, tolerance.
 
@@ -215,6 +216,7 @@ pub fn run(root: &Path, args: &[String]) -> Result<(), String> {
     } else {
         crate::cargo(&["test", "--workspace", "--", "--ignored"])?;
     }
+    crate::regress_mpi::run(root, &mut drift)?;
     if drift.is_empty() {
         println!("regress: all quantities within tolerance");
         Ok(())

@@ -5,7 +5,7 @@
 //!   then ghosts, and the cells around the owned nodes) and its validated form
 //!   ([`Partition`]: one owner per node, ghost layer complete, node halo built once); a bad
 //!   part gives the same error on every rank, never a hang.
-//! - [`rcb`]: recursive coordinate bisection, and the parts of a whole grid on rank 0.
+//! - [`mod@rcb`]: recursive coordinate bisection, and the parts of a whole grid on rank 0.
 //! - `scatter`: each rank's share of the problem (its part and the roles of its nodes),
 //!   given by the caller or made on rank 0 and sent.
 //! - `halo`: the non-blocking exchange of ghost values; `comm`: the all-reduces, the

@@ -1,0 +1,247 @@
+//! The MPI part of `cargo xtask regress` (docs/mpi.md): skipped with a message when
+//! `mpirun` is absent.
+//!
+//! 1. Builds `aeroshape` and the example `distributed` of `deform` with the feature `mpi`
+//!    (release profile).
+//! 2. On the ~100k-node Gmsh wing-body grid (`target/grids/wing_body.su2`, made by
+//!    `fixtures/grids/make_grids.py --size 100k` when absent): the serial `aeroshape deform`
+//!    and `mpirun -n 2` and `-n 3 --oversubscribe` of the same command (the partition made
+//!    on rank 0); every node of the gathered grid within 1e-8 of the serial one, relative to
+//!    the largest displacement, and no cell with q ≤ 0.
+//! 3. The partition given by the caller (`distributed` example, 3 ranks) against the serial
+//!    result, and two bad partitions (a missing ghost, a global id owned twice): exit status
+//!    1 with the error on every rank, within a time limit (a hang fails).
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// The motion of the wing-body test: the whole body pitched 2° about a spanwise axis,
+/// the symmetry plane sliding, solved to 1e-11.
+const FLAGS: &[&str] = &[
+    "--rigid",
+    "wing",
+    "--rigid",
+    "fuselage",
+    "--rotate-deg",
+    "2",
+    "--axis-point",
+    "5,0,0",
+    "--axis-dir",
+    "0,1,0",
+    "--slide",
+    "symmetry",
+    "--tolerance",
+    "1e-11",
+];
+
+/// Relative deviation allowed from the serial result.
+const REL: f64 = 1e-8;
+
+fn have(cmd: &str) -> bool {
+    Command::new(cmd)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// `mpirun` with the flags CI needs (root, more ranks than cores), under a time limit.
+fn mpirun(n: usize, prog: &Path, args: &[&str]) -> Result<Output, String> {
+    let mut c = Command::new("timeout");
+    c.arg("600").arg("mpirun");
+    if std::env::var("USER").is_ok_and(|u| u == "root") || is_root() {
+        c.arg("--allow-run-as-root");
+    }
+    c.arg("--oversubscribe")
+        .args(["-n", &n.to_string()])
+        .arg(prog)
+        .args(args);
+    eprintln!("$ mpirun -n {n} {} {}", prog.display(), args.join(" "));
+    c.output().map_err(|e| format!("cannot run mpirun: {e}"))
+}
+
+fn is_root() -> bool {
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+}
+
+/// Node coordinates of an SU2 grid (the `NPOIN` section).
+fn su2_points(path: &Path) -> Result<Vec<[f64; 3]>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut lines = text.lines();
+    let bad = || format!("{}: malformed NPOIN section", path.display());
+    let head = lines
+        .by_ref()
+        .find(|l| l.trim_start().starts_with("NPOIN"))
+        .ok_or_else(bad)?;
+    let n: usize = head
+        .split('=')
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .ok_or_else(bad)?;
+    let mut out = Vec::with_capacity(n);
+    for l in lines.take(n) {
+        let v: Vec<f64> = l
+            .split_whitespace()
+            .take(3)
+            .filter_map(|s| s.parse().ok())
+            .collect();
+        if v.len() < 2 {
+            return Err(bad());
+        }
+        out.push([v[0], v[1], v.get(2).copied().unwrap_or(0.0)]);
+    }
+    if out.len() != n {
+        return Err(bad());
+    }
+    Ok(out)
+}
+
+/// Largest node deviation of `a` from `b`, relative to the largest displacement of `b`
+/// from `x0`.
+fn deviation(x0: &[[f64; 3]], a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let d = |p: &[f64; 3], q: &[f64; 3]| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
+    let dev = a.iter().zip(b).map(|(p, q)| d(p, q)).fold(0.0, f64::max);
+    let disp = b.iter().zip(x0).map(|(p, q)| d(p, q)).fold(0.0, f64::max);
+    dev / disp
+}
+
+/// Runs the MPI checks; drifts are pushed on `drift`.
+pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
+    if !have("mpirun") {
+        println!("regress: MPI tests skipped (mpirun not found; see docs/mpi.md)");
+        return Ok(());
+    }
+    let grid = root.join("target/grids/wing_body.su2");
+    if !grid.exists() {
+        let status = Command::new("python3")
+            .args([
+                "fixtures/grids/make_grids.py",
+                "--size",
+                "100k",
+                "--out",
+                "target/grids",
+                "wing_body",
+            ])
+            .current_dir(root)
+            .status()
+            .map_err(|e| format!("cannot run python3: {e}"))?;
+        if !status.success() {
+            return Err("fixtures/grids/make_grids.py --size 100k failed".into());
+        }
+    }
+    crate::cargo(&[
+        "build",
+        "--release",
+        "-q",
+        "-p",
+        "aeroshape-cli",
+        "--features",
+        "mpi",
+    ])?;
+    crate::cargo(&[
+        "build",
+        "--release",
+        "-q",
+        "-p",
+        "deform",
+        "--features",
+        "mpi",
+        "--example",
+        "distributed",
+    ])?;
+    let bin = root.join("target/release/aeroshape");
+    let out = root.join("target/regress/mpi");
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let g = grid.display().to_string();
+    let serial = out.join("serial.su2");
+    let s = serial.display().to_string();
+    let mut args = vec!["deform", g.as_str(), "-o", s.as_str()];
+    args.extend(FLAGS);
+    eprintln!("$ aeroshape {}", args.join(" "));
+    let st = Command::new(&bin)
+        .args(&args)
+        .status()
+        .map_err(|e| format!("{}: {e}", bin.display()))?;
+    if !st.success() {
+        return Err("serial aeroshape deform failed".into());
+    }
+    let x0 = su2_points(&grid)?;
+    let xs = su2_points(&serial)?;
+    for n in [2usize, 3] {
+        let o = out.join(format!("ranks{n}.su2"));
+        let r = out.join(format!("ranks{n}.json"));
+        let (os, rs) = (o.display().to_string(), r.display().to_string());
+        let mut args = vec![
+            "deform",
+            g.as_str(),
+            "-o",
+            os.as_str(),
+            "--report",
+            rs.as_str(),
+        ];
+        args.extend(FLAGS);
+        let res = mpirun(n, &bin, &args)?;
+        if !res.status.success() {
+            drift.push(format!(
+                "mpi: -n {n}: aeroshape deform failed ({}): {}",
+                res.status,
+                String::from_utf8_lossy(&res.stderr)
+                    .lines()
+                    .next()
+                    .unwrap_or("")
+            ));
+            continue;
+        }
+        let rel = deviation(&x0, &su2_points(&o)?, &xs);
+        let report: serde_json::Value = std::fs::read_to_string(&r)
+            .ok()
+            .and_then(|t| serde_json::from_str(&t).ok())
+            .ok_or_else(|| format!("{}: unreadable report", r.display()))?;
+        let inverted = report["quality_after"]["n_nonpositive"].as_u64();
+        let iters = &report["distributed"]["iterations"];
+        println!(
+            "regress: mpi -n {n}: deviation from serial {rel:.3e} relative, {} iterations, inverted cells {inverted:?}",
+            iters
+        );
+        if rel.is_nan() || rel > REL {
+            drift.push(format!(
+                "mpi: -n {n}: deviation {rel:e} from the serial result exceeds {REL:e}"
+            ));
+        }
+        if inverted != Some(0) {
+            drift.push(format!("mpi: -n {n}: inverted cells {inverted:?}"));
+        }
+    }
+    let ex = root.join("target/release/examples/distributed");
+    let res = mpirun(3, &ex, &["24", "ok"])?;
+    print!("{}", String::from_utf8_lossy(&res.stdout));
+    if !res.status.success() {
+        drift.push(format!(
+            "mpi: given partition, 3 ranks: {}",
+            String::from_utf8_lossy(&res.stderr)
+                .lines()
+                .next()
+                .unwrap_or("failed")
+        ));
+    }
+    for (mode, text) in [
+        ("missing-ghost", "missing ghost"),
+        ("duplicate-id", "owned by ranks"),
+    ] {
+        let res = mpirun(2, &ex, &["12", mode])?;
+        let err = String::from_utf8_lossy(&res.stderr);
+        let lines = err.lines().filter(|l| l.contains(text)).count();
+        let code = res.status.code();
+        println!("regress: mpi bad partition ({mode}): exit {code:?}, {lines} rank(s) reported it");
+        // timeout exits 124 on a hang; mpirun exits 1 when its ranks do.
+        if code != Some(1) || lines != 2 {
+            drift.push(format!(
+                "mpi: bad partition ({mode}): exit {code:?}, {lines} of 2 ranks printed \"{text}\""
+            ));
+        }
+    }
+    Ok(())
+}
