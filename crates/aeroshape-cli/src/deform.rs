@@ -85,6 +85,11 @@ pub struct DeformArgs {
     /// Write the grid even if cells are inverted after the incremental retries.
     #[arg(long)]
     pub allow_inverted: bool,
+    /// Under mpirun: aggregates per rank of the coarse-grid correction of the distributed
+    /// preconditioner (0: the per-rank multigrid blocks alone; docs/mpi.md).
+    #[cfg(feature = "mpi")]
+    #[arg(long, value_name = "N", default_value_t = deform::distributed::COARSE_PARTS)]
+    pub coarse_parts: usize,
 }
 
 fn parse_vec3(s: &str) -> Result<[f64; 3], String> {

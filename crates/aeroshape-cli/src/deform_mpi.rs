@@ -73,7 +73,8 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
     let seconds_read = t.elapsed().as_secs_f64();
     let whole = input.as_ref().map(|(m, bc)| (m, bc));
     let d = Deformer::from_root(&world, whole, &opts)
-        .with_context(|| format!("{}", args.mesh.display()))?;
+        .with_context(|| format!("{}", args.mesh.display()))?
+        .coarse_parts(args.coarse_parts);
     let out = d
         .deform()
         .with_context(|| format!("{}", args.mesh.display()))?;

@@ -135,6 +135,21 @@ impl Springs<'_> {
 /// (0.1–0.2 measured best: docs/crates/deform.md, "Wall-distance stiffness").
 const WALL_SCALE: f64 = 0.2;
 
+/// The springs' scale ([`Springs::scale`]) of a grid whose bounding box has the diagonal
+/// `diag`: a power of two near 1 / diag^p (exact scaling; K is ~1 / length^p).
+pub(crate) fn length_scale(diag: f64, kind: Stiffness) -> f64 {
+    let power = if kind == Stiffness::InverseLength {
+        1
+    } else {
+        2
+    };
+    if diag.is_finite() && diag > 0.0 {
+        2f64.powi(power * diag.log2().round() as i32)
+    } else {
+        1.0
+    }
+}
+
 /// The stiffness evaluator at `x`; for [`Stiffness::WallDistance`], `distance` is the
 /// wall distance when already computed ([`edge_distance`] of `adj`, `x`, `moving`).
 pub(crate) fn springs<'a>(
@@ -208,17 +223,7 @@ pub(crate) fn springs<'a>(
     }
     // A power of two near 1 / diag^p (exact scaling; K is ~1 / length^p): the baseline
     // grid's size serves every state (any power of two would give the same solution).
-    let diag = mesh.bbox_diagonal();
-    let power = if kind == Stiffness::InverseLength {
-        1
-    } else {
-        2
-    };
-    let scale = if diag.is_finite() && diag > 0.0 {
-        2f64.powi(power * diag.log2().round() as i32)
-    } else {
-        1.0
-    };
+    let scale = length_scale(mesh.bbox_diagonal(), kind);
     Springs {
         x,
         kind,

@@ -13,6 +13,7 @@ use mpi::traits::*;
 use serde::Serialize;
 use sparse::{Constraints, V3};
 
+use super::coarse::{CoarseOp, CoarseSpace};
 use super::comm::{Comm, agree, max, min, sum_u64};
 use super::halo::Halo;
 use super::partition::{LocalGrid, Partition};
@@ -24,7 +25,7 @@ use crate::bc::{BoundaryConditions, NodeRole};
 use crate::error::{Error, Result};
 use crate::operator::check_converged;
 use crate::options::{DeformOptions, SolverKind};
-use crate::stiffness::{Stiffness, springs};
+use crate::stiffness::{Stiffness, length_scale, springs};
 
 /// What a distributed deformation did (the same figures on every rank).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -49,6 +50,8 @@ pub struct DistReport {
     pub residual: f64,
     /// Bytes sent by all ranks in one halo exchange of the unknowns (one product A p).
     pub bytes_per_iteration: u64,
+    /// Aggregates of the coarse-grid correction over the ranks (0: none).
+    pub coarse_aggregates: usize,
     /// Minimum cell quality before and after.
     pub min_quality: [f64; 2],
     /// Cells with q ≤ 0 before and after.
@@ -83,6 +86,10 @@ pub struct DistDeformed {
     pub report: DistReport,
 }
 
+/// Aggregates per rank of the coarse-grid correction by default ([`Deformer::coarse_parts`]):
+/// iterations at 1, 2 and 4 ranks in docs/mpi.md, "Coarse-grid correction".
+pub const COARSE_PARTS: usize = 256;
+
 /// The distributed deformation set-up on a communicator.
 pub struct Deformer<'c> {
     comm: &'c Comm,
@@ -93,6 +100,12 @@ pub struct Deformer<'c> {
     unk_node: Vec<u32>,
     unk_halo: Halo,
     setup: f64,
+    /// The springs' scale of the whole grid (a rank's own grid would give its rows another
+    /// power of two than its neighbours' and the matrix over the ranks would not be
+    /// symmetric).
+    scale: f64,
+    /// Aggregates per rank of the coarse-grid correction (0: none).
+    coarse_parts: usize,
 }
 
 /// The cells of the local grid this rank counts (those whose smallest global node id it
@@ -188,6 +201,16 @@ impl<'c> Deformer<'c> {
             .map(|(k, &i)| (part.grid.global_ids[i as usize], k as u32))
             .collect();
         let unk_halo = agree(comm, Halo::build(comm, &ghosts, &owned))?;
+        // The whole grid's bounding box, for the springs' scale.
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in &part.grid.mesh.coords[..n_owned] {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let (lo, hi) = (lo.map(|v| min(comm, v)), hi.map(|v| max(comm, v)));
+        let diag = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
         let sys = System {
             unk_of,
             node_of,
@@ -203,7 +226,37 @@ impl<'c> Deformer<'c> {
             unk_node,
             unk_halo,
             setup,
+            scale: length_scale(diag, opts.stiffness),
+            coarse_parts: COARSE_PARTS,
         })
+    }
+
+    /// Sets the aggregates per rank of the coarse-grid correction (0: block preconditioner
+    /// alone). On one rank there is none: the block is the whole grid's multigrid.
+    pub fn coarse_parts(mut self, parts: usize) -> Self {
+        self.coarse_parts = parts;
+        self
+    }
+
+    /// The coarse space of the set-up's unknowns, when there is one (collective).
+    fn coarse_space(&self) -> Option<CoarseSpace> {
+        if self.comm.size() < 2 || self.coarse_parts == 0 {
+            return None;
+        }
+        let x = &self.local.part.grid.mesh.coords;
+        let coords: Vec<[f64; 3]> = self.sys.node_of.iter().map(|&i| x[i as usize]).collect();
+        let mut constrained = vec![false; coords.len()];
+        for &(k, _) in &self.sys.cons.items {
+            constrained[k as usize] = true;
+        }
+        Some(CoarseSpace::new(
+            self.comm,
+            &self.unk_halo,
+            &coords,
+            &constrained,
+            self.unk_node.len(),
+            self.coarse_parts,
+        ))
     }
 
     /// This rank's partition.
@@ -234,7 +287,10 @@ impl<'c> Deformer<'c> {
             bytes_per_iteration: sum_u64(comm, self.unk_halo.bytes_sent(3) as u64),
             ..DistReport::default()
         };
-        rep.seconds.setup = self.setup;
+        let t = Instant::now();
+        let coarse = self.coarse_space();
+        rep.coarse_aggregates = coarse.as_ref().map_or(0, CoarseSpace::len);
+        rep.seconds.setup = self.setup + max(comm, t.elapsed().as_secs_f64());
         let t = Instant::now();
         let cells = counted_cells(part);
         let (min0, bad0) = self.quality(&cells, x0);
@@ -246,7 +302,7 @@ impl<'c> Deformer<'c> {
             let (mut iterations, mut rot_iterations, mut residual) = (0, 0, 0.0f64);
             for m in 1..=inc {
                 let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
-                let o = self.increment(s, &mut cur, &mut rep.seconds)?;
+                let o = self.increment(s, &mut cur, coarse.as_ref(), &mut rep.seconds)?;
                 iterations += o.0;
                 rot_iterations += o.1;
                 residual = residual.max(o.2);
@@ -288,6 +344,7 @@ impl<'c> Deformer<'c> {
         &self,
         s: f64,
         cur: &mut [[f64; 3]],
+        coarse: Option<&CoarseSpace>,
         sec: &mut DistSeconds,
     ) -> Result<(usize, usize, f64)> {
         let (comm, opts, part, sys) = (self.comm, &self.opts, &self.local.part, &self.sys);
@@ -321,9 +378,14 @@ impl<'c> Deformer<'c> {
             return Ok((0, 0, 0.0));
         }
         let t = Instant::now();
-        let sp = springs(&part.grid.mesh, cur, opts.stiffness, &part.adj, &[], None);
+        let mut sp = springs(&part.grid.mesh, cur, opts.stiffness, &part.adj, &[], None);
+        sp.scale = self.scale;
         let op = DistOperator::new(sys, &part.adj, &sp, sys.node_of.len(), opts);
-        let op = agree(comm, op)?;
+        let mut op = agree(comm, op)?;
+        if let Some(space) = coarse {
+            let c = CoarseOp::new(comm, space, op.matrix(), sys.node_of.len());
+            op.coarse = Some(agree(comm, c)?);
+        }
         sec.assemble += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let ctx = Ctx {

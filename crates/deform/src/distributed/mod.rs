@@ -16,6 +16,7 @@
 //! - [`deformer`]: [`Deformer`] (takes a communicator), the increments and the quality
 //!   guard with all-reduced counts, the gather on rank 0.
 
+mod coarse;
 mod comm;
 pub mod deformer;
 mod halo;
@@ -26,7 +27,7 @@ mod scatter;
 mod solve;
 
 pub use comm::Comm;
-pub use deformer::{Deformer, DistDeformed, DistReport, DistSeconds};
+pub use deformer::{COARSE_PARTS, Deformer, DistDeformed, DistReport, DistSeconds};
 /// The MPI bindings (rsmpi) the distributed deformation is built on, for the caller's
 /// `mpi::initialize()` and communicators.
 pub use mpi;

@@ -10,6 +10,7 @@ use rayon::prelude::*;
 use sparse::vec3::{CHUNK, V3, dot};
 use sparse::{Constraints, Csr, Jacobi, Preconditioner, SolveReport, SymMatrix};
 
+use super::coarse::CoarseOp;
 use super::comm::{Comm, sum, sum_n};
 use super::halo::Halo;
 use crate::assembly::{System, assemble, couplings};
@@ -39,6 +40,8 @@ pub(crate) struct DistOperator {
     block: Block,
     /// The springs from each owned unknown to its prescribed neighbours.
     pub couplings: Csr,
+    /// The coarse-grid correction across the ranks (none on one rank).
+    pub coarse: Option<CoarseOp>,
 }
 
 impl DistOperator {
@@ -95,6 +98,7 @@ impl DistOperator {
             interior,
             block,
             couplings,
+            coarse: None,
         })
     }
 
@@ -136,12 +140,35 @@ impl DistOperator {
         }
     }
 
-    fn precondition(&self, r: &[V3], z: &mut [V3]) {
+    fn block(&self, r: &[V3], z: &mut [V3]) {
         match &self.block {
             Block::Amg(m) => m.apply(r, z),
             Block::Jacobi(m) => m.apply(r, z),
             Block::Empty => {}
         }
+    }
+
+    /// z = M r (projected), M the block preconditioner B alone, or with the coarse-grid
+    /// correction Q = P A_c⁻¹ Pᵀ: M = Q + (I − Q A) B (I − A Q) (collective).
+    fn precondition(&self, comm: &Comm, cons: &Constraints, r: &[V3], z: &mut [V3]) {
+        let Some(c) = &self.coarse else {
+            self.block(r, z);
+            cons.project(z);
+            return;
+        };
+        let c1 = c.coarse_of(comm, r);
+        let mut s = r.to_vec();
+        c.sub_product(&c1, &mut s);
+        cons.project(&mut s);
+        self.block(&s, z);
+        cons.project(z);
+        let mut c2 = c.coarse_of_product(comm, z);
+        for (a, b) in c2.iter_mut().zip(&c1) {
+            for q in 0..3 {
+                a[q] = b[q] - a[q];
+            }
+        }
+        c.add_prolonged(&c2, z);
     }
 
     /// Projected PCG on A x = b over the ranks (owned unknowns of `b` and `x`; `x` holds the
@@ -179,12 +206,13 @@ impl DistOperator {
         let mut r = vec![[0.0; 3]; n];
         residual(x, &mut full, &mut r);
         let mut z = vec![[0.0; 3]; n];
-        self.precondition(&r, &mut z);
-        cons.project(&mut z);
+        self.precondition(comm, cons, &r, &mut z);
         let [mut rr, mut rz] = sum_n(comm, [dot(&r, &r), dot(&r, &z)]);
-        let name = match self.block {
-            Block::Amg(_) => "block-amg",
-            _ => "block-jacobi",
+        let name = match (&self.block, &self.coarse) {
+            (Block::Amg(_), None) => "block-amg",
+            (Block::Amg(_), Some(_)) => "block-amg-coarse",
+            (_, None) => "block-jacobi",
+            (_, Some(_)) => "block-jacobi-coarse",
         };
         let mut it = 0;
         if rr.sqrt() > rel_tol * scale {
@@ -205,8 +233,7 @@ impl DistOperator {
                         r[k][c] -= alpha * q[k][c];
                     }
                 }
-                self.precondition(&r, &mut z);
-                cons.project(&mut z);
+                self.precondition(comm, cons, &r, &mut z);
                 let [rr_new, rz_new] = sum_n(comm, [dot(&r, &r), dot(&r, &z)]);
                 rr = rr_new;
                 if rr.sqrt() <= rel_tol * scale {
