@@ -179,12 +179,18 @@ struct Report<'a> {
 /// Runs the subcommand.
 pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     let t_all = Instant::now();
-    let format = mesh::io::Format::from_path(&args.output).ok_or_else(|| {
-        anyhow::anyhow!(
+    // .pvtu: a grid in pieces, one per rank (under mpirun only).
+    let pieces = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pvtu"));
+    let format = mesh::io::Format::from_path(&args.output);
+    if format.is_none() && !pieces {
+        bail!(
             "{}: unknown output format (use .su2, .msh or .vtu)",
             args.output.display()
-        )
-    })?;
+        );
+    }
     let mut inputs: Vec<&Path> = vec![&args.mesh];
     if let Some(g) = &args.geometry {
         inputs.push(g);
@@ -207,6 +213,12 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     if crate::deform_mpi::launched() {
         return crate::deform_mpi::run(&args, request);
     }
+    let Some(format) = format else {
+        bail!(
+            "{}: a .pvtu output (one piece per rank) is written under mpirun by a build with the feature mpi; use .su2, .msh or .vtu",
+            args.output.display()
+        );
+    };
     let bar = progress_bar();
     let t = Instant::now();
     bar_msg(&bar, "reading");

@@ -1,7 +1,9 @@
 //! `mpirun -n N aeroshape deform ...` (cargo feature `mpi`): the same flags as the serial
 //! command; rank 0 reads the grid, the deformation runs distributed
 //! (`deform::distributed`, the partition made on rank 0), and rank 0 writes the gathered
-//! grid in one file (and the report). Every rank reports an error, and exits 1, alike.
+//! grid in one file (and the report), or, for an output `NAME.pvtu`, every rank writes its
+//! piece `NAME/NAME_<rank>.vtu` and rank 0 the index naming them. Every rank reports an
+//! error, and exits 1, alike.
 
 use std::time::Instant;
 
@@ -25,8 +27,11 @@ struct Report<'a> {
     input: String,
     output: String,
     cells: usize,
-    quality_before: mesh::quality::Summary,
-    quality_after: mesh::quality::Summary,
+    /// The whole grid's quality (gathered output only; the pieces' are in `distributed`).
+    quality_before: Option<mesh::quality::Summary>,
+    quality_after: Option<mesh::quality::Summary>,
+    /// The pieces of a `.pvtu` output.
+    pieces: Vec<String>,
     seconds_read: f64,
     seconds_write: f64,
     seconds_total: f64,
@@ -54,8 +59,14 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
     let universe = mpi::initialize().context("MPI could not be initialised")?;
     let world = universe.world();
     let root = world.rank() == 0;
-    let format = mesh::io::Format::from_path(&args.output)
-        .ok_or_else(|| anyhow::anyhow!("{}: unknown output format", args.output.display()))?;
+    let format =
+        if pieces(&args.output) {
+            None
+        } else {
+            Some(mesh::io::Format::from_path(&args.output).ok_or_else(|| {
+                anyhow::anyhow!("{}: unknown output format", args.output.display())
+            })?)
+        };
     let t = Instant::now();
     let input = if root {
         Some(read(args, &request))
@@ -78,12 +89,50 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
     let out = d
         .deform()
         .with_context(|| format!("{}", args.mesh.display()))?;
-    let gathered = d.gather(&out.coords);
-    let written = match (input, gathered) {
-        (Some((m, _)), Some(coords)) => {
-            write(args, format, m, coords, &out.report, seconds_read, t_all)
+    let written = match format {
+        Some(format) => {
+            let gathered = d.gather(&out.coords);
+            match (input, gathered) {
+                (Some((m, _)), Some(coords)) => {
+                    let q = Some(quality(&m, &coords));
+                    let t = Instant::now();
+                    let mut m = m;
+                    m.coords = coords;
+                    aeroshape::fsio::write_atomic(&args.output, |w| mesh::io::write(&m, format, w))
+                        .map_err(anyhow::Error::from)
+                        .and_then(|()| {
+                            report(
+                                args,
+                                &m,
+                                q,
+                                Vec::new(),
+                                &out.report,
+                                [seconds_read, t.elapsed().as_secs_f64()],
+                                t_all,
+                            )
+                        })
+                }
+                _ => Ok(()),
+            }
         }
-        _ => Ok(()),
+        None => write_pieces(&world, &d, &out.coords, args).and_then(|sources| match &input {
+            Some((m, _)) => {
+                let t = Instant::now();
+                aeroshape::fsio::write_atomic(&args.output, |w| {
+                    mesh::pvtu::write(&sources, true, w)
+                })?;
+                report(
+                    args,
+                    m,
+                    None,
+                    sources,
+                    &out.report,
+                    [seconds_read, t.elapsed().as_secs_f64()],
+                    t_all,
+                )
+            }
+            None => Ok(()),
+        }),
     };
     if !all_ok(&world, written.is_ok()) {
         written?;
@@ -95,37 +144,84 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn write(
+/// True when `path` names a grid in pieces (`.pvtu`).
+pub fn pieces(path: &std::path::Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pvtu"))
+}
+
+/// The whole grid's quality before and after (rank 0).
+fn quality(m: &mesh::Mesh, coords: &[[f64; 3]]) -> [mesh::quality::Summary; 2] {
+    [
+        mesh::quality::summary(&mesh::quality::cell_quality(m)),
+        mesh::quality::summary(&mesh::quality::cell_quality_at(m, coords)),
+    ]
+}
+
+/// Every rank writes its piece `DIR/NAME/NAME_<rank>.vtu` of the output `DIR/NAME.pvtu`
+/// (the nodes it holds, the cells and boundary elements it counts; point data the
+/// displacement); returns the pieces' paths relative to DIR once every rank has written
+/// its own (collective).
+fn write_pieces(
+    world: &distributed::Comm,
+    d: &Deformer<'_>,
+    coords: &[[f64; 3]],
     args: &DeformArgs,
-    format: mesh::io::Format,
-    m: mesh::Mesh,
-    coords: Vec<[f64; 3]>,
+) -> anyhow::Result<Vec<String>> {
+    let stem = args
+        .output
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .ok_or_else(|| anyhow::anyhow!("{}: no file name", args.output.display()))?
+        .to_string();
+    let dir = args.output.with_extension("");
+    let source = |r: i32| format!("{stem}/{stem}_{r}.vtu");
+    let mine = (|| -> anyhow::Result<()> {
+        std::fs::create_dir_all(&dir).with_context(|| format!("{}", dir.display()))?;
+        let (piece, displacement) = d.piece(coords);
+        let opts = mesh::vtu::VtuOptions::default().with_displacement(&displacement);
+        let path = dir.join(format!("{stem}_{}.vtu", world.rank()));
+        aeroshape::fsio::write_atomic(&path, |w| mesh::vtu::write(&piece, &opts, w))
+            .with_context(|| format!("{}", path.display()))
+    })();
+    if !all_ok(world, mine.is_ok()) {
+        mine?;
+        bail!(
+            "{}: another rank could not write its piece",
+            args.output.display()
+        );
+    }
+    Ok((0..world.size()).map(source).collect())
+}
+
+/// The report (rank 0), when asked for.
+fn report(
+    args: &DeformArgs,
+    m: &mesh::Mesh,
+    quality: Option<[mesh::quality::Summary; 2]>,
+    pieces: Vec<String>,
     rep: &distributed::DistReport,
-    seconds_read: f64,
+    [seconds_read, t_write]: [f64; 2],
     t_all: Instant,
 ) -> anyhow::Result<()> {
-    let t = Instant::now();
-    let before = mesh::quality::summary(&mesh::quality::cell_quality(&m));
-    let after = mesh::quality::summary(&mesh::quality::cell_quality_at(&m, &coords));
-    let mut out = m;
-    out.coords = coords;
-    aeroshape::fsio::write_atomic(&args.output, |w| mesh::io::write(&out, format, w))?;
-    if let Some(path) = &args.report {
-        let r = Report {
-            input: args.mesh.display().to_string(),
-            output: args.output.display().to_string(),
-            cells: out.cells.len(),
-            quality_before: before,
-            quality_after: after,
-            seconds_read,
-            seconds_write: t.elapsed().as_secs_f64(),
-            seconds_total: t_all.elapsed().as_secs_f64(),
-            distributed: rep,
-        };
-        aeroshape::fsio::write_atomic(path, |w| {
-            serde_json::to_writer_pretty(&mut *w, &r).map_err(std::io::Error::other)?;
-            writeln!(w)
-        })?;
-    }
+    let Some(path) = &args.report else {
+        return Ok(());
+    };
+    let r = Report {
+        input: args.mesh.display().to_string(),
+        output: args.output.display().to_string(),
+        cells: m.cells.len(),
+        quality_before: quality.map(|q| q[0]),
+        quality_after: quality.map(|q| q[1]),
+        pieces,
+        seconds_read,
+        seconds_write: t_write,
+        seconds_total: t_all.elapsed().as_secs_f64(),
+        distributed: rep,
+    };
+    aeroshape::fsio::write_atomic(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &r).map_err(std::io::Error::other)?;
+        writeln!(w)
+    })?;
     Ok(())
 }

@@ -24,6 +24,7 @@ pub mod generate;
 pub mod grid;
 pub mod io;
 pub mod msh;
+pub mod pvtu;
 pub mod quality;
 pub mod su2;
 mod text;

@@ -7,7 +7,7 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
-use mesh::Mesh;
+use mesh::{Elements, Marker, Mesh};
 use mpi::datatype::PartitionMut;
 use mpi::traits::*;
 use serde::Serialize;
@@ -108,18 +108,21 @@ pub struct Deformer<'c> {
     coarse_parts: usize,
 }
 
-/// The cells of the local grid this rank counts (those whose smallest global node id it
-/// owns: each cell is counted once over the ranks).
+/// True when this rank counts the element `e` of its local grid: it owns the element's node
+/// of smallest global id (so each cell and boundary element is counted by one rank).
+fn counts(part: &Partition, e: &[u32]) -> bool {
+    let g = &part.grid;
+    e.iter()
+        .min_by_key(|&&v| g.global_ids[v as usize])
+        .is_some_and(|&v| (v as usize) < g.n_owned)
+}
+
+/// The cells of the local grid this rank counts ([`counts`]).
 fn counted_cells(part: &Partition) -> Mesh {
     let g = &part.grid;
-    let me = part.owner.first().copied().unwrap_or(0);
     let mut m = Mesh::new(g.mesh.dim);
     for (kind, e) in g.mesh.cells.iter() {
-        let lowest = e
-            .iter()
-            .min_by_key(|&&v| g.global_ids[v as usize])
-            .map(|&v| v as usize);
-        if lowest.is_some_and(|v| v < g.n_owned && part.owner[v] == me) {
+        if counts(part, e) {
             m.cells.push(kind, e, None);
         }
     }
@@ -462,6 +465,36 @@ impl<'c> Deformer<'c> {
         part.halo.exchange(comm, cur);
         sec.solve += t.elapsed().as_secs_f64();
         Ok((r.iterations, rf.iterations, r.rel_residual))
+    }
+
+    /// This rank's piece of the grid at its local coordinates `coords` (a result's
+    /// [`DistDeformed::coords`]), for a grid written in pieces (one `.vtu` per rank): the
+    /// local nodes (owned, then ghosts) at `coords`, the cells and the boundary elements
+    /// (under every marker's name, in the same order on every rank) that this rank counts,
+    /// each cell and element being in one piece; and the nodes' displacements.
+    pub fn piece(&self, coords: &[[f64; 3]]) -> (Mesh, Vec<[f64; 3]>) {
+        let part = &self.local.part;
+        let mut m = counted_cells(part);
+        m.coords = coords.to_vec();
+        for mk in &part.grid.mesh.markers {
+            let mut elements = Elements::new();
+            for (kind, e) in mk.elements.iter() {
+                if counts(part, e) {
+                    elements.push(kind, e, None);
+                }
+            }
+            m.markers.push(Marker {
+                name: mk.name.clone(),
+                tag: mk.tag,
+                elements,
+            });
+        }
+        let d = coords
+            .iter()
+            .zip(&part.grid.mesh.coords)
+            .map(|(x, x0)| [x[0] - x0[0], x[1] - x0[1], x[2] - x0[2]])
+            .collect();
+        (m, d)
     }
 
     /// The owned nodes' coordinates of every rank, gathered on rank 0 in global-id order
