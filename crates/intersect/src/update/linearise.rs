@@ -60,6 +60,17 @@ enum PointKind {
     Plane { jinv: Matrix4<f64> },
 }
 
+/// The pseudo-inverse of a rank-deficient 3 × 3 Jacobian of Eq. 12, singular values below
+/// 1e-12 of the largest cut; `None` when every singular value is cut (no direction solved).
+fn pseudo_inverse3(j: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let svd = j.svd(true, true);
+    let largest = svd.singular_values.max();
+    if largest <= 0.0 {
+        return None;
+    }
+    svd.pseudo_inverse(1e-12 * largest).ok()
+}
+
 impl PointLin {
     fn new(
         label: &str,
@@ -91,7 +102,14 @@ impl PointLin {
                         k += 1;
                     }
                 }
-                let jinv = j.try_inverse().ok_or_else(|| singular("Eq. 12"))?;
+                // Singular where a surface degenerates (a column vanishes at a collapsed
+                // edge, e.g. a tip cap's leading-edge point): the parameter along the
+                // null space does not move the point, so the least-squares solution gives
+                // the one dq (pseudo-inverse; its transpose serves the reverse product).
+                let jinv = match j.try_inverse() {
+                    Some(inv) => inv,
+                    None => pseudo_inverse3(&j).ok_or_else(|| singular("Eq. 12"))?,
+                };
                 PointKind::Frozen { frozen, jinv }
             }
             Method::NormalPlane => {
