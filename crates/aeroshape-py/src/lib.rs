@@ -6,6 +6,7 @@
 //! the exception classes and `aeroshape.openmdao`. The user guide is `docs/python.md`.
 //!
 //! - [`study`]: `Study` (case file → baseline; `evaluate(x)` → `Evaluation`; `write`).
+//! - [`linearise`]: `Linearisation`, the chain's exact `jvp`/`vjp` products at one x.
 //! - [`grid`]: `Mesh`, `read_mesh`, `write_mesh`.
 //! - [`deformation`]: `deform(mesh, rigid=..., slide=..., fixed=..., ...)`, the keywords of
 //!   `aeroshape deform`.
@@ -23,6 +24,7 @@ pub mod arrays;
 pub mod deformation;
 pub mod errors;
 pub mod grid;
+pub mod linearise;
 pub mod progress;
 pub mod section;
 pub mod study;
@@ -33,6 +35,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<study::PyStudy>()?;
     m.add_class::<study::PyEvaluation>()?;
+    m.add_class::<linearise::PyLinearisation>()?;
     m.add_class::<study::PyDesignVariable>()?;
     m.add_class::<study::PyConstraints>()?;
     m.add_class::<grid::PyMesh>()?;

@@ -7,11 +7,9 @@
 //! (`allow_out_of_bounds` / `allow_infeasible` relax the last two, e.g. for finite-difference
 //! steps at a bound).
 //!
-//! Exact derivative products (`jvp`, `vjp`) are not here yet: the library has none (the
-//! derivatives issue adds `aeroshape::Study::jvp/vjp`). When they land, they are two methods
-//! of [`PyStudy`] beside `evaluate` (read `x` and the seed with [`arrays::read_vector`] /
-//! [`arrays::read_rows`], call the library inside `py.detach`, return [`arrays::coords`] /
-//! [`arrays::vector`]); see docs/python.md, "Not yet".
+//! The exact derivative products: `linearise(x)` gives a [`PyLinearisation`] whose `jvp` and
+//! `vjp` can be taken many times at that x; `jvp(x, dx)` and `vjp(x, x_bar)` are the one-off
+//! forms (each linearises afresh).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -28,6 +26,7 @@ use serde::Serialize;
 use crate::arrays;
 use crate::errors::{self, Kind};
 use crate::grid::PyMesh;
+use crate::linearise::PyLinearisation;
 use crate::progress::{self, Progress};
 
 /// One design variable of a study (a record; physical units, as in the case file).
@@ -132,7 +131,7 @@ pub struct PyStudy {
     inner: Arc<Study>,
     case_path: PathBuf,
     constraints: param::ConstraintMatrix,
-    wall: Vec<u32>,
+    wall: Arc<Vec<u32>>,
 }
 
 /// The files `write` can produce, by name: those of `aeroshape run --no-pictures`.
@@ -305,7 +304,7 @@ impl PyStudy {
                     format!("{}: {}", case_path.display(), errors::one_line(&e)),
                 )
             })?;
-        let wall = study
+        let wall: Vec<u32> = study
             .wall_nodes()
             .iter()
             .enumerate()
@@ -327,7 +326,7 @@ impl PyStudy {
             inner: Arc::new(study),
             case_path,
             constraints,
-            wall,
+            wall: Arc::new(wall),
         })
     }
 
@@ -485,6 +484,61 @@ impl PyStudy {
             report: PyOnceLock::new(),
             inner: Arc::new(ev),
         })
+    }
+
+    /// Evaluates the chain at `x` and linearises every phase there (the deformation started
+    /// cold, so the result belongs to x alone): the returned `Linearisation` gives exact
+    /// `jvp`/`vjp` products at x as often as asked. `x` is checked as in `evaluate`.
+    #[pyo3(signature = (x, *, allow_infeasible=false, allow_out_of_bounds=false))]
+    fn linearise(
+        &self,
+        py: Python<'_>,
+        x: &Bound<'_, PyAny>,
+        allow_infeasible: bool,
+        allow_out_of_bounds: bool,
+    ) -> PyResult<PyLinearisation> {
+        let x = arrays::read_vector(x, "x")?;
+        self.check_design(py, &x, allow_infeasible, allow_out_of_bounds)?;
+        let (study, wall) = (Arc::clone(&self.inner), Arc::clone(&self.wall));
+        py.detach(|| PyLinearisation::new(study, wall, &x))
+            .map_err(|e| errors::from_study(py, &e))
+    }
+
+    /// dX = J dx at `x` (`linearise(x).jvp(dx, wall=wall)`): `n_nodes × 3`, or the wall rows
+    /// (`n_wall × 3`) with `wall=True`.
+    #[pyo3(signature = (x, dx, *, wall=false, allow_infeasible=false, allow_out_of_bounds=false))]
+    fn jvp<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        dx: &Bound<'py, PyAny>,
+        wall: bool,
+        allow_infeasible: bool,
+        allow_out_of_bounds: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.linearise(py, x, allow_infeasible, allow_out_of_bounds)?
+            .jvp(py, dx, wall)
+    }
+
+    /// x̄ = Jᵀ X̄ at `x` (`linearise(x).vjp(...)`): one value per design variable, from the
+    /// grid's cotangent `x_bar` (`n_nodes × 3`), or from the wall rows' (`n_wall × 3`) with
+    /// `wall=True`.
+    #[pyo3(signature = (x, x_bar, *, wall=false, allow_infeasible=false, allow_out_of_bounds=false))]
+    fn vjp<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        x_bar: &Bound<'py, PyAny>,
+        wall: bool,
+        allow_infeasible: bool,
+        allow_out_of_bounds: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let lin = self.linearise(py, x, allow_infeasible, allow_out_of_bounds)?;
+        if wall {
+            lin.vjp(py, None, Some(x_bar))
+        } else {
+            lin.vjp(py, Some(x_bar), None)
+        }
     }
 
     /// The wall-clock seconds of the library's `evaluate(x)` alone, timed in Rust with the GIL

@@ -119,4 +119,19 @@ def constrained_case(tmp: Path, constraints: str) -> Path:
     return p
 
 
-__all__ = ["ROOT", "DATA", "DEFAULT", "SPHERE", "run_cli", "cli_error", "constrained_case", "released"]
+def tight_case(tmp: Path) -> Path:
+    """A copy of the sphere case (absolute paths) whose deformation solves run to 1e-12, so
+    that products and differences of the volume grid are not limited by the solver's 1e-8."""
+    text = (SPHERE / "case.ron").read_text()
+    text = text.replace('"../../geom/sphere.ron"', f'"{(ROOT / "fixtures" / "geom" / "sphere.ron").as_posix()}"')
+    text = text.replace('grid: "grid.msh"', f'grid: "{(SPHERE / "grid.msh").as_posix()}"')
+    anchor = '  fixed: ["farfield"],\n'
+    assert anchor in text, "layout of fixtures/cases/sphere/case.ron changed"
+    text = text.replace(anchor, anchor + "  deform: (rel_tol: 1e-12),\n")
+    p = tmp / "case.ron"
+    p.write_text(text)
+    return p
+
+
+__all__ = ["ROOT", "DATA", "DEFAULT", "SPHERE", "run_cli", "cli_error", "constrained_case",
+           "released", "tight_case"]

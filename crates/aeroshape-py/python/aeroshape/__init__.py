@@ -6,7 +6,8 @@ numpy's own memory. Progress goes to a ``progress`` callback where a function ta
 else to the ``logging`` logger ``"aeroshape"`` (DEBUG for progress, INFO for summaries,
 WARNING for reader remarks and violated constraints); nothing is printed.
 
-- :class:`Study` -- a case file built once; ``evaluate(x)`` gives the deformed grid.
+- :class:`Study` -- a case file built once; ``evaluate(x)`` gives the deformed grid,
+  ``linearise(x)`` its exact ``jvp``/``vjp`` products.
 - :func:`read_mesh`, :func:`write_mesh`, :class:`Mesh` -- grids as numpy arrays.
 - :func:`deform` -- the volume deformation of ``aeroshape deform``.
 - :func:`section_fit`, :func:`section_build`, :func:`write_section` -- wing sections.
@@ -35,6 +36,7 @@ from ._native import (
     Deformation,
     DesignVariable,
     Evaluation,
+    Linearisation,
     Mesh,
     SectionFit,
     Study,
@@ -61,6 +63,7 @@ __all__ = [
     "Evaluation",
     "EvaluationError",
     "GeometryError",
+    "Linearisation",
     "Mesh",
     "MeshError",
     "OutputError",

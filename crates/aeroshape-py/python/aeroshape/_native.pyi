@@ -152,6 +152,39 @@ class Study:
     def forget_warm_start(self) -> None:
         """Makes the next evaluation start its solves from the baseline rather than from
         the previous solution."""
+    def linearise(
+        self,
+        x: _ArrayLike,
+        *,
+        allow_infeasible: bool = False,
+        allow_out_of_bounds: bool = False,
+    ) -> Linearisation:
+        """Evaluates the chain at ``x`` (checked as in :meth:`evaluate`; the deformation
+        started cold) and linearises every phase there: exact ``jvp``/``vjp`` products at
+        ``x``, as many as wanted, each for the price of the products alone."""
+    def jvp(
+        self,
+        x: _ArrayLike,
+        dx: _ArrayLike,
+        *,
+        wall: bool = False,
+        allow_infeasible: bool = False,
+        allow_out_of_bounds: bool = False,
+    ) -> _Float64Array:
+        """dX = J dx at ``x``: ``n_nodes × 3``, or the wall rows (``n_wall × 3``) with
+        ``wall=True``. Linearises afresh: use :meth:`linearise` for several products."""
+    def vjp(
+        self,
+        x: _ArrayLike,
+        x_bar: _ArrayLike,
+        *,
+        wall: bool = False,
+        allow_infeasible: bool = False,
+        allow_out_of_bounds: bool = False,
+    ) -> _Float64Array:
+        """x̄ = Jᵀ X̄ at ``x``: one value per design variable, from the grid's cotangent
+        ``x_bar`` (``n_nodes × 3``), or the wall rows' (``n_wall × 3``) with ``wall=True``.
+        Linearises afresh: use :meth:`linearise` for several products."""
     def write(
         self,
         out_dir: _StrPath,
@@ -194,6 +227,27 @@ class Evaluation:
         """The deformed grid (a copy)."""
     def write(self, out_dir: _StrPath, *, formats: Sequence[_Format] | None = None) -> list[str]:
         """``Study.write(out_dir, self, formats=formats)``."""
+
+@final
+class Linearisation:
+    """The chain linearised at one design vector (:meth:`Study.linearise`): the design
+    variables → control nodes (param's exact Jacobian) → updated model (junctions by the
+    implicit function theorem on Eqs. 12–13) → wall grid → volume grid (Eqs. 14–26)."""
+
+    @property
+    def x(self) -> _Float64Array:
+        """The design vector linearised at."""
+    @property
+    def volume_coordinates(self) -> _Float64Array:
+        """The volume grid's coordinates at ``x``, ``n_nodes × 3``."""
+    def jvp(self, dx: _ArrayLike, *, wall: bool = False) -> _Float64Array:
+        """dX = J dx for the design direction ``dx``: ``n_nodes × 3``, or the
+        ``Study.wall_nodes`` rows (``n_wall × 3``, no volume solve) with ``wall=True``."""
+    def vjp(self, x_bar: _ArrayLike | None = None, *,
+            wall_bar: _ArrayLike | None = None) -> _Float64Array:
+        """x̄ = Jᵀ X̄, one value per design variable, from the grid's cotangent ``x_bar``
+        (``n_nodes × 3``, one adjoint deformation solve) and/or the wall rows' ``wall_bar``
+        (``n_wall × 3``, no solve); both given: the sum."""
 
 @final
 class Mesh:

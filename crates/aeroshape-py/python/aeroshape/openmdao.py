@@ -17,10 +17,11 @@
 
   The wall nodes are ``study.wall_nodes`` in increasing order.
 
-Derivatives: the library has no exact derivative products yet, so the component declares
-finite-difference partials (``declare_partials(..., method="fd")``). When
-``Study.jvp``/``Study.vjp`` exist, replace :meth:`Component.setup_partials` by a
-``compute_jacvec_product`` that calls them (see docs/python.md, "Not yet").
+Derivatives: :class:`Component` is matrix-free: ``compute_jacvec_product`` takes the chain's
+exact products (:meth:`aeroshape.Study.linearise`, kept for the current inputs), forward
+(``jvp``) and reverse (``vjp``; a seed on the wall output alone needs no deformation solve).
+:class:`FdComponent` is the same component with finite-difference partials instead, for
+comparison or for a case whose products fail.
 
 :func:`add_linear_constraints` adds the study's linear inequalities ``a @ x <= b`` to a
 group as one linear constraint with exact (constant) partials.
@@ -34,12 +35,13 @@ from typing import Any
 import numpy as np
 import openmdao.api as om  # type: ignore[import-untyped]
 
-from ._native import Evaluation, Study
+from ._native import Evaluation, Linearisation, Study
 
 __all__ = [
     "WALL_OUTPUT",
     "VOLUME_OUTPUT",
     "Component",
+    "FdComponent",
     "LinearConstraints",
     "add_design_vars",
     "add_linear_constraints",
@@ -59,17 +61,14 @@ def _study(case: str | os.PathLike[str] | None, study: Study | None) -> Study:
     raise ValueError("give exactly one of case=PATH or study=STUDY")
 
 
-class Component(om.ExplicitComponent):  # type: ignore[misc]
-    """A study as an explicit component (see the module doc).
+class _StudyComponent(om.ExplicitComponent):  # type: ignore[misc]
+    """A study as an explicit component (see the module doc); its subclasses give the
+    derivatives.
 
     Options: ``case`` or ``study`` (exactly one); ``wall_output`` and ``volume_output``
     (output names; ``volume_output=None`` leaves the volume grid out); ``warm_start``
     (default False: every evaluation starts its solves from the baseline, so outputs are a
-    function of the inputs alone, which finite differences need); ``fd_step`` and
-    ``fd_form`` (the finite-difference partials: the step of each variable is ``fd_step``
-    times its scale; the default 1e-3 stays well above the chain's round-off, whose noise
-    in the wall coordinates is about 1e-11 of the model size, and well below the
-    curvature's scale).
+    function of the inputs alone, as derivatives need).
 
     Evaluations accept infeasible and out-of-bounds design vectors (a finite-difference
     step at a bound leaves it): the driver enforces bounds and constraints.
@@ -93,11 +92,6 @@ class Component(om.ExplicitComponent):  # type: ignore[misc]
                              desc="name of the flattened volume-grid coordinates (None: none)")
         self.options.declare("warm_start", default=False, types=bool,
                              desc="start each evaluation's solves from the previous solution")
-        self.options.declare("fd_step", default=1e-3, types=float,
-                             desc="finite-difference step of each design variable, in units of "
-                                  "its scale")
-        self.options.declare("fd_form", default="central", values=("forward", "backward", "central"),
-                             desc="form of the finite-difference partials")
 
     @property
     def study(self) -> Study:
@@ -118,13 +112,6 @@ class Component(om.ExplicitComponent):  # type: ignore[misc]
             self.add_output(self.options["volume_output"], val=study.baseline_coordinates.ravel(),
                             desc="volume-grid coordinates, x y z per node", tags=["mphys_coupling"])
 
-    def setup_partials(self) -> None:
-        # Finite differences until the library has exact products (docs/python.md, "Not yet").
-        for dv in self.study.design_variables:
-            self.declare_partials(of="*", wrt=dv.name, method="fd",
-                                  step=self.options["fd_step"] * dv.scale,
-                                  form=self.options["fd_form"], step_calc="abs")
-
     def design_vector(self, inputs: Any) -> np.ndarray:
         """The design vector (study order) from the component's inputs."""
         return np.array([inputs[n][0] for n in self._names], dtype=np.float64)
@@ -139,6 +126,70 @@ class Component(om.ExplicitComponent):  # type: ignore[misc]
         if self.options["volume_output"] is not None:
             outputs[self.options["volume_output"]] = ev.volume_coordinates.ravel()
         self.last_evaluation = ev
+
+
+class Component(_StudyComponent):
+    """A study as a matrix-free explicit component with the chain's exact products (see
+    the module doc). The linearisation is made at the first product after the inputs
+    change, and kept until they change again."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self._lin: Linearisation | None = None
+
+    def linearisation(self, inputs: Any) -> Linearisation:
+        """The chain linearised at the current inputs (made once per design vector)."""
+        x = self.design_vector(inputs)
+        if self._lin is None or not np.array_equal(self._lin.x, x):
+            self._lin = None  # the old one is dropped before the new one is made
+            self._lin = self.study.linearise(x, allow_infeasible=True, allow_out_of_bounds=True)
+        return self._lin
+
+    def compute_jacvec_product(self, inputs: Any, d_inputs: Any, d_outputs: Any,
+                               mode: str) -> None:
+        lin = self.linearisation(inputs)
+        wall_out, vol_out = self.options["wall_output"], self.options["volume_output"]
+        outs = [o for o in (wall_out, vol_out) if o is not None and o in d_outputs]
+        if mode == "fwd":
+            dx = np.array([d_inputs[n][0] if n in d_inputs else 0.0 for n in self._names])
+            if not outs or not dx.any():
+                return
+            if vol_out in outs:
+                dvol = lin.jvp(dx)
+                d_outputs[vol_out] += dvol.ravel()
+                if wall_out in outs:
+                    d_outputs[wall_out] += dvol[self.study.wall_nodes].ravel()
+            else:
+                d_outputs[wall_out] += lin.jvp(dx, wall=True).ravel()
+        else:
+            seeds = {o: np.asarray(d_outputs[o]).reshape(-1, 3) for o in outs}
+            grad = lin.vjp(seeds.get(vol_out), wall_bar=seeds.get(wall_out))
+            for n, g in zip(self._names, grad):
+                if n in d_inputs:
+                    d_inputs[n] += g
+
+
+class FdComponent(_StudyComponent):
+    """:class:`Component` with finite-difference partials instead of exact products.
+
+    Extra options: ``fd_step`` and ``fd_form`` (the step of each variable is ``fd_step``
+    times its scale; the default 1e-3 stays well above the chain's round-off, whose noise
+    in the wall coordinates is about 1e-11 of the model size, and well below the
+    curvature's scale)."""
+
+    def initialize(self) -> None:
+        super().initialize()
+        self.options.declare("fd_step", default=1e-3, types=float,
+                             desc="finite-difference step of each design variable, in units of "
+                                  "its scale")
+        self.options.declare("fd_form", default="central", values=("forward", "backward", "central"),
+                             desc="form of the finite-difference partials")
+
+    def setup_partials(self) -> None:
+        for dv in self.study.design_variables:
+            self.declare_partials(of="*", wrt=dv.name, method="fd",
+                                  step=self.options["fd_step"] * dv.scale,
+                                  form=self.options["fd_form"], step_calc="abs")
 
 
 def add_design_vars(group: om.Group, study: Study, *, prefix: str = "",
