@@ -54,7 +54,11 @@ impl PyLinearisation {
     }
 
     /// The forward product in the layout asked for.
-    fn forward(&self, dx: &[f64], wall: bool) -> Result<Vec<[f64; 3]>, aeroshape::study::StudyError> {
+    fn forward(
+        &self,
+        dx: &[f64],
+        wall: bool,
+    ) -> Result<Vec<[f64; 3]>, aeroshape::study::StudyError> {
         let lin = self.cell.borrow_dependent();
         if wall {
             let all = lin.jvp_wall(dx)?;
@@ -148,7 +152,9 @@ impl PyLinearisation {
         x_bar: Option<&Bound<'py, PyAny>>,
         wall_bar: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let volume = x_bar.map(|b| arrays::read_rows::<3>(b, "x_bar")).transpose()?;
+        let volume = x_bar
+            .map(|b| arrays::read_rows::<3>(b, "x_bar"))
+            .transpose()?;
         let wall = wall_bar
             .map(|b| arrays::read_rows::<3>(b, "wall_bar"))
             .transpose()?;
