@@ -4,7 +4,7 @@
 //! of the products alone (one deformation solve for a volume product, none for a wall one).
 //!
 //! The Rust linearisation borrows its study; here it is kept together with a reference-counted
-//! handle on that study in one [`self_cell`] (a well-kept crate for exactly this
+//! handle on that study in one [`self_cell!`] (a well-kept crate for exactly this
 //! owner-and-borrower pair; writing the self-reference by hand would need `unsafe`).
 //!
 //! Wall arrays are the `Study.wall_nodes` rows only (`n_wall × 3`), as in
