@@ -285,7 +285,11 @@ proptest! {
         let d = c.deformer(&opts);
         let base = d.deform(w, None).unwrap();
         prop_assert_eq!(base.report.increments, 2);
-        let lin = d.linearise(&base).unwrap().with_rel_tol(1e-14);
+        // 1e-12, not tighter: at 1e-14 the true residual of a solve that CG's recurrence
+        // calls converged can sit at the rounding floor just above it (seed 491171: 1.001e-14
+        // after 12 iterations), which is reported as NoConvergence. 1e-12 leaves the dot
+        // products a margin of 100 below the 1e-10 checked here.
+        let lin = d.linearise(&base).unwrap().with_rel_tol(1e-12);
         // Pseudo-random vectors from the seed.
         let mut s = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         let mut next = move || {
