@@ -46,8 +46,9 @@ pub struct ApplyArgs {
     /// The updated geometric database (RON).
     #[arg(short, long, value_name = "GEOM.ron")]
     pub output: PathBuf,
-    /// Also write the exact Jacobian d(control node coordinates)/d(design variables) as
-    /// JSON (CSR: row 3·node + coordinate, one column per design variable).
+    /// Also write the exact Jacobian d(control node coordinates)/d(design variables) of the
+    /// geometry written, model update included (the junctions' control nodes re-intersected),
+    /// as JSON (CSR: row 3·node + coordinate, one column per design variable).
     #[arg(long, value_name = "J.json")]
     pub jacobian: Option<PathBuf>,
     /// Apply even if linear constraints are violated (they are still reported).
@@ -260,13 +261,23 @@ fn apply(a: ApplyArgs) -> anyhow::Result<()> {
         .fold(0.0, f64::max);
     let opts = intersect::update::UpdateOptions::default().with_junction_rel_tol(a.junction_tol);
     let t0 = std::time::Instant::now();
-    let (new_db, report) = intersect::update::update_model(&db, &pts, &opts)
-        .with_context(|| format!("{}: model update", a.case.display()))?;
+    let label = || format!("{}: model update", a.case.display());
+    let base = intersect::update::ModelBaseline::new(&db, &opts).with_context(label)?;
+    let (new_db, report) = base.update(&pts).with_context(label)?;
     let model = aeroshape::study::ModelPhase::from_update(
         &report,
         db.reference_length(),
         t0.elapsed().as_secs_f64(),
     );
+    // the Jacobian of the geometry written: the modifiers' through the model update, so the
+    // junctions' control nodes (re-intersected) get their true rows
+    let jac = match jac {
+        Some(jp) => {
+            let lin = base.linearise(&pts, &new_db).with_context(label)?;
+            Some(aeroshape::study::model_jacobian(&lin, &jp).with_context(label)?)
+        }
+        None => None,
+    };
     write_atomic(&a.output, |w| new_db.write_ron(w))?;
     if let Some(path) = &a.report {
         let v = serde_json::json!({

@@ -32,6 +32,7 @@
 //! initial model bit for bit (nothing is marked changed, so nothing is recomputed).
 
 mod linearise;
+mod refit;
 
 pub use linearise::ModelLinearisation;
 
@@ -547,7 +548,7 @@ impl ModelBaseline {
                 if degrees.iter().zip(&curve.arcs).all(|(n, a)| *n == a.degree) {
                     break; // every arc above tolerance is at the highest degree
                 }
-                curve.arcs = refit_arcs(label, &curve.arcs, &degrees, s1, s2, &so)?;
+                curve.arcs = refit::refit_arcs(label, &curve.arcs, &degrees, s1, s2, &so)?.arcs;
                 refits += 1;
                 dist = curve_surfaces_distance(&*curve, (&ia, &ib), &opts.accuracy)?;
             }
@@ -663,54 +664,6 @@ pub fn refit_degree(n: usize, cap: usize) -> usize {
     (n + (n / 2).max(2))
         .min(cap.min(geom_db::control::MAX_DEGREE))
         .max(n)
-}
-
-/// Re-fits a junction's arcs at new `degrees`: the new control points of the raised arcs
-/// are the updated curve's points at the nodes of the new degree, seeded on the (updated)
-/// surfaces by Eq. (11) and re-intersected by Eq. (12); arcs whose degree did not change
-/// keep their control points, and so do the curve's ends (corners).
-fn refit_arcs<S: geom_db::eval::ParamSurface + ?Sized>(
-    label: &str,
-    arcs: &[Arc],
-    degrees: &[usize],
-    s1: &S,
-    s2: &S,
-    so: &SsiOptions,
-) -> Result<Vec<Arc>> {
-    let mut pts = Vec::new();
-    let mut tan = Vec::new();
-    let mut raised = Vec::new();
-    for (k, (arc, &n)) in arcs.iter().zip(degrees).enumerate() {
-        for (i, &x) in geom_db::control::nodes(n).iter().enumerate() {
-            if k > 0 && i == 0 {
-                continue;
-            }
-            let d = arc.derivs(x);
-            pts.push(d.point);
-            tan.push(d.d1);
-            raised.push(n != arc.degree && i > 0 && i < n);
-        }
-    }
-    let po = so.project.clone();
-    let pa = SurfaceProjector::new(format!("{label}: surface 1"), s1, &po)?;
-    let pb = SurfaceProjector::new(format!("{label}: surface 2"), s2, &po)?;
-    // the updated curve is off its surfaces by the error being corrected: the seeds are
-    // only Newton starts, so the initial-gap check is loosened
-    let seed_opts = SsiOptions {
-        max_initial_gap_rel: 1e-3,
-        ..so.clone()
-    };
-    let seeds =
-        IntersectionSeeds::new(label, &pts, Some(&tan), Some(degrees), &pa, &pb, &seed_opts)?;
-    let up = update_curve_points(&seeds, s1, s2, so)?;
-    let new: Vec<Point3> = up
-        .new_points()
-        .into_iter()
-        .zip(&pts)
-        .zip(&raised)
-        .map(|((n, o), r)| if *r { n } else { *o })
-        .collect();
-    Ok(arcs_from_chain(degrees, &new))
 }
 
 /// Gives the arcs of curve `ci` whose degree a re-fit raised as many control nodes as they

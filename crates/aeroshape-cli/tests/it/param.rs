@@ -134,24 +134,164 @@ fn apply_writes_updated_geometry_and_jacobian() {
         }
     }
     assert!(new.control_points() != db.control_points());
-    // the Jacobian file is the library's Jacobian
+    // the Jacobian file's shape (its values: the next test, against central differences)
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&jac).unwrap()).unwrap();
     assert_eq!(v["n_cols"], 18);
+    // a row per control node of the geometry written (the junction's re-fit added some)
     assert_eq!(
         v["n_rows"].as_u64().unwrap() as usize,
-        3 * db.control_points().len()
+        3 * new.control_points().len()
     );
-    let vals: Vec<f64> = v["values"]
-        .as_array()
-        .unwrap()
+    // every modifier entry is there, plus the junction's rows
+    assert!(v["values"].as_array().unwrap().len() > j.data().len());
+}
+
+/// Runs `param apply` at the design vector `x` (every variable named, full precision),
+/// returning the written geometry's control nodes flattened.
+fn apply_at(dir: &Path, names: &[String], x: &[f64], tag: &str) -> Vec<f64> {
+    let dv = dir.join(format!("dv{tag}.ron"));
+    let body: Vec<String> = names
         .iter()
-        .map(|x| x.as_f64().unwrap())
+        .zip(x)
+        .map(|(n, v)| format!("  \"{n}\": {v:?},"))
         .collect();
-    assert_eq!(vals.len(), j.data().len());
-    for (a, b) in vals.iter().zip(j.data()) {
-        // JSON text keeps ~17 significant digits
-        assert!((a - b).abs() <= 1e-15 * b.abs(), "{a} vs {b}");
+    std::fs::write(&dv, format!("{{\n{}\n}}\n", body.join("\n"))).unwrap();
+    let out = dir.join(format!("g{tag}.ron"));
+    let o = bin()
+        .args(["param", "apply"])
+        .arg(case_path())
+        .arg("--dv")
+        .arg(&dv)
+        .arg("-o")
+        .arg(&out)
+        .arg("--allow-infeasible")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let db = GeomDb::from_ron_str(&std::fs::read_to_string(&out).unwrap(), "out").unwrap();
+    db.control_points()
+        .iter()
+        .flat_map(|p| [p.x, p.y, p.z])
+        .collect()
+}
+
+/// The written Jacobian is the written geometry's: every column against fourth-order
+/// central differences of `param apply` itself (the geometry files it writes), the
+/// junction's rows included, through the re-fit the update makes at this design vector
+/// (the modifiers' own Jacobian leaves those rows zero: off by 16–57 % before).
+#[test]
+fn jacobian_of_the_written_geometry_matches_central_differences_of_apply() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out, jac) = (dir.path().join("g.ron"), dir.path().join("j.json"));
+    let o = bin()
+        .args(["param", "apply"])
+        .arg(case_path())
+        .arg("--dv")
+        .arg(dv_path())
+        .arg("-o")
+        .arg(&out)
+        .arg("--jacobian")
+        .arg(&jac)
+        .arg("--report")
+        .arg(dir.path().join("r.json"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("r.json")).unwrap()).unwrap();
+    assert!(
+        r["update"]["refits"].as_u64().unwrap() > 0,
+        "the case's design vector re-fits a junction"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&jac).unwrap()).unwrap();
+    let get = |k: &str| -> Vec<f64> {
+        v[k].as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let (ptr, cols, vals) = (get("row_ptr"), get("col_idx"), get("values"));
+    let (n_rows, n_cols) = (
+        v["n_rows"].as_u64().unwrap() as usize,
+        v["n_cols"].as_u64().unwrap() as usize,
+    );
+    let mut dense = vec![vec![0.0; n_rows]; n_cols];
+    for r in 0..n_rows {
+        for k in ptr[r] as usize..ptr[r + 1] as usize {
+            dense[cols[k] as usize][r] = vals[k];
+        }
     }
+    let (case, db) = load();
+    let prep = case
+        .parametrisation
+        .bind(&db, &MasterSources::new())
+        .unwrap();
+    let reg = prep.registry();
+    let names: Vec<String> = reg.variables().iter().map(|v| v.name.clone()).collect();
+    assert_eq!(n_cols, names.len());
+    let x = reg
+        .vector_from_values(&load_design_values(&dv_path()).unwrap())
+        .unwrap();
+    let (_, jp) = prep.apply_with_jacobian(&x).unwrap();
+    // junction nodes: control nodes of no surface (the re-fit's new nodes included)
+    let on_surface = |i: usize| {
+        db.surfaces
+            .iter()
+            .any(|s| s.control.nodes.iter().flatten().any(|id| id.index() == i))
+    };
+    let junction: Vec<usize> = (0..n_rows / 3).filter(|&i| !on_surface(i)).collect();
+    assert!(!junction.is_empty());
+    assert!(
+        n_rows / 3 > db.control_nodes.len(),
+        "the re-fit adds control nodes"
+    );
+    let mut junction_cols = 0;
+    for (l, var) in reg.variables().iter().enumerate() {
+        // fourth-order differences, step twice the variable's scale within its bounds: the
+        // update's noise (the re-fit's seed feet, ~5e-10 of the model size) over h is 4e-6
+        // at h = 0.1 scale, 7e-8 at 2 scales; the truncation error O(h⁴) stays below it
+        let h = (2.0 * var.scale)
+            .min((var.upper - x[l]) / 2.0)
+            .min((x[l] - var.lower) / 2.0);
+        let at = |s: f64, tag: &str| {
+            let mut y = x.clone();
+            y[l] += s * h;
+            apply_at(dir.path(), &names, &y, tag)
+        };
+        let (p1, m1, p2, m2) = (at(1.0, "p1"), at(-1.0, "m1"), at(2.0, "p2"), at(-2.0, "m2"));
+        assert_eq!(p1.len(), n_rows, "{}: rows", var.name);
+        let fd: Vec<f64> = (0..n_rows)
+            .map(|r| (8.0 * (p1[r] - m1[r]) - (p2[r] - m2[r])) / (12.0 * h))
+            .collect();
+        let size = fd.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let err = fd
+            .iter()
+            .zip(&dense[l])
+            .fold(0.0f64, |a, (f, j)| a.max((f - j).abs()));
+        let jn = junction
+            .iter()
+            .flat_map(|&i| (0..3).map(move |c| 3 * i + c))
+            .fold(0.0f64, |a, r| a.max(fd[r].abs()));
+        let mut modifier_only = param::jacobian::column(&jp, l);
+        modifier_only.resize(n_rows, 0.0);
+        let old = fd
+            .iter()
+            .zip(&modifier_only)
+            .fold(0.0f64, |a, (f, j)| a.max((f - j).abs()));
+        eprintln!(
+            "{}: |FD| {size:.3e}, error {:.2e} (modifiers' Jacobian alone {:.2e}), junction rows {jn:.3e}",
+            var.name,
+            err / size,
+            old / size
+        );
+        assert!(size > 0.0, "{}: column zero", var.name);
+        assert!(err <= 1e-6 * size, "{}: error {:.3e}", var.name, err / size);
+        if jn > 1e-6 * size {
+            junction_cols += 1;
+        }
+    }
+    assert!(junction_cols > 0, "some variable moves the junction");
 }
 
 fn fd_check(prep: &Prepared, x: &[f64], what: &str) {

@@ -314,3 +314,49 @@ impl ChainLinearisation<'_> {
         self.vjp_wall(&xs)
     }
 }
+
+/// The Jacobian of the updated model's control nodes with respect to the design variables,
+/// d(updated control node coordinates)/dx = J_m J_p: the modifiers' Jacobian `jp`
+/// (`Prepared::apply_with_jacobian`) through the model update's linearisation `lin`, so the
+/// rows of the junctions' control nodes (re-intersected, Eqs. 12–13) are their true
+/// derivatives. Same layout as `jp` (row 3·node + coordinate, one column per variable),
+/// with a row per control node of the updated model (a re-fit adds nodes after the input's).
+pub fn model_jacobian(
+    lin: &intersect::update::ModelLinearisation,
+    jp: &param::Jacobian,
+) -> Result<param::Jacobian> {
+    // the rows are the updated model's nodes: a junction the update re-fitted has more
+    let n = lin.model().control_nodes.len();
+    length("modifier Jacobian rows", 3 * lin.n_inputs(), jp.rows())?;
+    let cols: Vec<Vec<Vector3>> = (0..jp.cols())
+        .map(|l| {
+            let c = param::jacobian::column(jp, l);
+            let dp: Vec<Vector3> = c
+                .chunks_exact(3)
+                .map(|v| Vector3::new(v[0], v[1], v[2]))
+                .collect();
+            lin.jvp(&dp).map(|t| t.nodes)
+        })
+        .collect::<std::result::Result<_, _>>()?;
+    let mut indptr = Vec::with_capacity(3 * n + 1);
+    let (mut indices, mut data) = (Vec::new(), Vec::new());
+    indptr.push(0);
+    for k in 0..n {
+        for c in 0..3 {
+            for (l, col) in cols.iter().enumerate() {
+                let v = col[k][c];
+                if v != 0.0 {
+                    indices.push(l);
+                    data.push(v);
+                }
+            }
+            indptr.push(indices.len());
+        }
+    }
+    Ok(param::Jacobian::new(
+        (3 * n, jp.cols()),
+        indptr,
+        indices,
+        data,
+    ))
+}

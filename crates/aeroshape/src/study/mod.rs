@@ -67,7 +67,7 @@ pub mod report;
 mod setup;
 
 pub use error::{Result, StudyError};
-pub use linearise::{ChainLinearisation, FdCheck};
+pub use linearise::{ChainLinearisation, FdCheck, model_jacobian};
 pub use report::{DeformPhase, ModelPhase, ParamPhase, Quality, Report, SetupReport, SurfacePhase};
 
 /// The result of [`Study::evaluate`].

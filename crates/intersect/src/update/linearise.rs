@@ -18,6 +18,8 @@
 //!    H dt = −[(δa − δb)·a′ + d·δa′, −(δa − δb)·b′ − d·δb′] with the Hessian H of the
 //!    solve; the corner is the midpoint ½ (a + b). A corner on one curve is δc(t).
 //! 4. **Snap**: a re-intersected curve's end control point at a corner is that corner.
+//!    A junction the update re-fitted (degrees raised) is differentiated through its re-fit
+//!    rounds ([`super::refit`]: foot seeds and Eq. 12 again at the new nodes).
 //! 5. **Component ends** inside a curve: the foot of the normal of the corner on the final
 //!    curve, (c(t) − p)·c′(t) = 0: dt = −[(δc − dp)·c′ + (c − p)·δc′] / (c′·c′ + (c − p)·c″).
 //! 6. **Junction nodes**: the mean of the new control points of the curves that use them.
@@ -35,6 +37,7 @@ use geom_db::prelude::{Matrix2, Point3, Vector3};
 use geom_db::{CornerId, CurveId, GeomDb, SurfaceId};
 use nalgebra::{Matrix3, Matrix4, Vector4};
 
+use super::refit::RefitLin;
 use super::{ModelBaseline, arcs_from_chain, corner_label, curve_label};
 use crate::corner::{CornerOptions, solve_corner};
 use crate::error::{Error, Result};
@@ -43,7 +46,7 @@ use crate::ssi::{Method, Param, SsiOptions, update_curve_points};
 /// One control point of a re-intersected curve: the solved Eq. 12 and its factorised
 /// Jacobian.
 #[derive(Debug, Clone)]
-struct PointLin {
+pub(super) struct PointLin {
     /// Parameters y = [u₁, v₁, u₂, v₂] at the solution.
     y: [f64; 4],
     /// Surface 1 and 2 at the solution.
@@ -72,7 +75,7 @@ fn pseudo_inverse3(j: &Matrix3<f64>) -> Option<Matrix3<f64>> {
 }
 
 impl PointLin {
-    fn new(
+    pub(super) fn new(
         label: &str,
         i: usize,
         y: [f64; 4],
@@ -130,24 +133,56 @@ impl PointLin {
         Ok(Self { y, s1, s2, kind })
     }
 
+    /// The solution's parameters [u₁, v₁, u₂, v₂].
+    pub(super) fn y(&self) -> [f64; 4] {
+        self.y
+    }
+
+    /// Surface 1 at the solution.
+    pub(super) fn s1(&self) -> &SurfaceDerivs {
+        &self.s1
+    }
+
+    /// The frozen parameter (index into y), None for the normal-plane fallback.
+    pub(super) fn frozen(&self) -> Option<usize> {
+        match &self.kind {
+            PointKind::Frozen { frozen, .. } => Some(*frozen),
+            PointKind::Plane { .. } => None,
+        }
+    }
+
+    /// The Jacobian column of y_k in Eq. 12: [r₁,u, r₁,v, −r₂,u, −r₂,v]_k.
+    fn column(&self, k: usize) -> Vector3 {
+        match k {
+            0 => self.s1.du,
+            1 => self.s1.dv,
+            2 => -self.s2.du,
+            _ => -self.s2.dv,
+        }
+    }
+
     /// dq from the surfaces' perturbations at the solution (`e1` on surface 1, `e2` on
-    /// surface 2; their points only) and, for the fallback, the plane's tangent `t`.
-    fn forward(&self, e1: &Vector3, e2: &Vector3, t: &Vector3) -> Vector3 {
+    /// surface 2; their points only), for the fallback the plane's tangent `t`, and `s`: the
+    /// perturbation of the frozen parameter's value (Frozen), or of the plane equation's
+    /// constant, −(p_old·t)′ (fallback); zero where those are the initial model's.
+    pub(super) fn forward(&self, e1: &Vector3, e2: &Vector3, t: &Vector3, s: f64) -> Vector3 {
         let df = e1 - e2;
         let mut dy = [0.0; 4];
         match &self.kind {
             PointKind::Frozen { frozen, jinv } => {
-                let z = -(jinv * df);
+                let z = -(jinv * (df + self.column(*frozen) * s));
                 let mut k = 0;
                 for (c, d) in dy.iter_mut().enumerate() {
                     if c != *frozen {
                         *d = z[k];
                         k += 1;
+                    } else {
+                        *d = s;
                     }
                 }
             }
             PointKind::Plane { jinv } => {
-                let rhs = Vector4::new(df.x, df.y, df.z, e1.dot(t));
+                let rhs = Vector4::new(df.x, df.y, df.z, e1.dot(t) + s);
                 let z = -(jinv * rhs);
                 dy = [z[0], z[1], z[2], z[3]];
             }
@@ -157,8 +192,8 @@ impl PointLin {
     }
 
     /// The transpose of [`forward`](Self::forward): the cotangents of the surfaces' points
-    /// (ē₁, ē₂) from the point's cotangent `q`.
-    fn reverse(&self, q: &Vector3, t: &Vector3) -> (Vector3, Vector3) {
+    /// (ē₁, ē₂) and of `s` from the point's cotangent `q`.
+    pub(super) fn reverse(&self, q: &Vector3, t: &Vector3) -> (Vector3, Vector3, f64) {
         let half = 0.5 * q;
         let ybar = [
             self.s1.du.dot(&half),
@@ -167,7 +202,7 @@ impl PointLin {
             self.s2.dv.dot(&half),
         ];
         let (mut e1, mut e2) = (half, half);
-        match &self.kind {
+        let sb = match &self.kind {
             PointKind::Frozen { frozen, jinv } => {
                 let mut zb = Vector3::zeros();
                 let mut k = 0;
@@ -180,6 +215,7 @@ impl PointLin {
                 let dfb = -(jinv.transpose() * zb);
                 e1 += dfb;
                 e2 -= dfb;
+                ybar[*frozen] + self.column(*frozen).dot(&dfb)
             }
             PointKind::Plane { jinv } => {
                 let zb = Vector4::new(ybar[0], ybar[1], ybar[2], ybar[3]);
@@ -187,9 +223,10 @@ impl PointLin {
                 let dfb = Vector3::new(rb[0], rb[1], rb[2]);
                 e1 += dfb + t * rb[3];
                 e2 -= dfb;
+                rb[3]
             }
-        }
-        (e1, e2)
+        };
+        (e1, e2, sb)
     }
 }
 
@@ -200,6 +237,10 @@ struct CurveLin {
     surfaces: [SurfaceId; 2],
     /// Arc degrees of the chain (the initial curve's).
     degrees: Vec<usize>,
+    /// Arc degrees after the update (raised where the junction was re-fitted).
+    final_degrees: Vec<usize>,
+    /// The re-fits of the snapped chain, if the update re-fitted the curve.
+    refit: Option<RefitLin>,
     points: Vec<PointLin>,
     /// Per point, the plane tangent of the fallback (unused for frozen points).
     tangents: Vec<Vector3>,
@@ -296,19 +337,12 @@ impl ModelBaseline {
         let mut pre_curves = pre.curves.clone();
         let mut curves = Vec::new();
         let mut lin_of = vec![None; init.curves.len()];
+        let mut pre_chains = Vec::new();
         for (ci, seeds) in self.seeds.iter().enumerate() {
             let Some(cs) = seeds else { continue };
             let degrees: Vec<usize> = init.curves[ci].arcs.iter().map(|a| a.degree).collect();
             let final_degrees: Vec<usize> = db.curves[ci].arcs.iter().map(|a| a.degree).collect();
             let label = curve_label(init, CurveId::from_index(ci));
-            if final_degrees != degrees {
-                return Err(Error::BadEntity {
-                    entity: label,
-                    reason: format!(
-                        "arcs of degrees {final_degrees:?} after the update (re-fitted from {degrees:?}): the linearisation of a re-fit is not available"
-                    ),
-                });
-            }
             let (s1, s2) = (
                 &pre.surfaces[cs.surfaces[0].index()],
                 &pre.surfaces[cs.surfaces[1].index()],
@@ -324,6 +358,7 @@ impl ModelBaseline {
                 points.push(PointLin::new(&label, i, y, d1, d2, p.method, t)?);
                 tangents.push(t);
             }
+            pre_chains.push(up.new_points());
             if surf_changed[cs.surfaces[0].index()] || surf_changed[cs.surfaces[1].index()] {
                 pre_curves[ci].arcs = arcs_from_chain(&degrees, &up.new_points());
             } else {
@@ -334,6 +369,8 @@ impl ModelBaseline {
                 curve: CurveId::from_index(ci),
                 surfaces: cs.surfaces,
                 degrees,
+                final_degrees,
+                refit: None,
                 points,
                 tangents,
                 snap: [None, None],
@@ -448,6 +485,50 @@ impl ModelBaseline {
                 }
             }
         }
+        // 4b. re-fits of the snapped chains, replayed (their result is the update's)
+        for (cl, chain) in curves.iter_mut().zip(pre_chains) {
+            if cl.final_degrees == cl.degrees {
+                continue;
+            }
+            let label = curve_label(init, cl.curve);
+            let mut chain = chain;
+            for (end, k) in cl.snap.iter().enumerate() {
+                if let Some(k) = k {
+                    let i = if end == 0 { 0 } else { chain.len() - 1 };
+                    chain[i] = db.corners[k.index()].point;
+                }
+            }
+            let s = |k: usize| &pre.surfaces[cl.surfaces[k].index()];
+            let (lin, arcs) = RefitLin::new(
+                &label,
+                cl.surfaces,
+                arcs_from_chain(&cl.degrees, &chain),
+                &cl.final_degrees,
+                self.opts.max_refit_degree,
+                (s(0), s(1)),
+                &so,
+            )?;
+            let off = arcs
+                .iter()
+                .zip(&db.curves[cl.curve.index()].arcs)
+                .flat_map(|(a, b)| {
+                    let (pa, pb) = (a.control_points(), b.control_points());
+                    pa.into_iter()
+                        .zip(pb)
+                        .map(|(p, q)| (p - q).norm())
+                        .collect::<Vec<_>>()
+                })
+                .fold(0.0f64, f64::max);
+            if off.is_nan() || off > 1e-9 * self.scale {
+                return Err(Error::BadEntity {
+                    entity: label,
+                    reason: format!(
+                        "the re-fit replayed for the linearisation is {off:.3e} off the update's"
+                    ),
+                });
+            }
+            cl.refit = Some(lin);
+        }
         // 6. junction nodes: the final curves' control lists
         let mut members: Vec<Vec<(usize, usize)>> = vec![Vec::new(); db.control_nodes.len()];
         for (li, cl) in curves.iter().enumerate() {
@@ -480,7 +561,7 @@ impl ModelBaseline {
 }
 
 /// The per-arc lists of a chain (shared arc ends repeated).
-fn chain_to_arcs(degrees: &[usize], chain: &[Vector3]) -> Vec<Vec<Vector3>> {
+pub(super) fn chain_to_arcs(degrees: &[usize], chain: &[Vector3]) -> Vec<Vec<Vector3>> {
     let mut out = Vec::with_capacity(degrees.len());
     let mut k = 0;
     for &n in degrees {
@@ -501,7 +582,7 @@ fn chain_cotangent_to_arcs(degrees: &[usize], chain: &[Vector3]) -> Vec<Vec<Vect
 }
 
 /// The transpose of [`chain_to_arcs`]: per-arc cotangents summed into the chain.
-fn arcs_to_chain(arcs: &[Vec<Vector3>]) -> Vec<Vector3> {
+pub(super) fn arcs_to_chain(arcs: &[Vec<Vector3>]) -> Vec<Vector3> {
     let total: usize = arcs.iter().map(|a| a.len() - 1).sum();
     let mut chain = vec![Vector3::zeros(); total + 1];
     let mut k = 0;
@@ -561,7 +642,7 @@ impl ModelLinearisation {
                 .map(|(p, tan)| {
                     let e1 = t.surface_at(db, cl.surfaces[0], p.y[0], p.y[1]).point;
                     let e2 = t.surface_at(db, cl.surfaces[1], p.y[2], p.y[3]).point;
-                    p.forward(&e1, &e2, tan)
+                    p.forward(&e1, &e2, tan, 0.0)
                 })
                 .collect();
             t.curves[cl.curve.index()] = Some(chain_to_arcs(&cl.degrees, &chain));
@@ -601,6 +682,13 @@ impl ModelLinearisation {
                 *chain.last_mut().expect("curve with arcs") = t.corners[k.index()];
             }
             t.curves[cl.curve.index()] = Some(chain_to_arcs(&cl.degrees, chain));
+        }
+        // 4b. re-fits
+        for (cl, chain) in self.curves.iter().zip(&mut chains) {
+            if let Some(r) = &cl.refit {
+                *chain = r.forward(&t, db, chain);
+                t.curves[cl.curve.index()] = Some(chain_to_arcs(&cl.final_degrees, chain));
+            }
         }
         // 5. component ends on the final curves
         for e in &self.ends {
@@ -690,6 +778,12 @@ impl ModelLinearisation {
             }
             w.nodes[*id] = Vector3::zeros();
         }
+        // 4bᵀ re-fits
+        for (cl, chain) in self.curves.iter().zip(&mut chains) {
+            if let Some(r) = &cl.refit {
+                *chain = r.reverse(&mut w, db, chain);
+            }
+        }
         // 4ᵀ snap
         for (cl, chain) in self.curves.iter().zip(&mut chains) {
             let last = chain.len() - 1;
@@ -746,7 +840,7 @@ impl ModelLinearisation {
         for cl in &self.curves {
             let chain = arcs_to_chain(w.curves[cl.curve.index()].as_ref().expect("own curve"));
             for ((p, tan), q) in cl.points.iter().zip(&cl.tangents).zip(&chain) {
-                let (e1, e2) = p.reverse(q, tan);
+                let (e1, e2, _) = p.reverse(q, tan);
                 let b1 = SurfaceTangent {
                     point: e1,
                     ..SurfaceTangent::default()

@@ -75,11 +75,13 @@ fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
-fn check_forward(s: f64) {
+/// Checks the forward product at the moved nodes `s` with `opts`; returns the update's
+/// number of re-fits there.
+fn check_forward(s: f64, opts: &UpdateOptions) -> usize {
     let db = load("wing_body.ron");
-    let base = ModelBaseline::new(&db, &UpdateOptions::default()).unwrap();
+    let base = ModelBaseline::new(&db, opts).unwrap();
     let x = moved(&db, s, 0.3);
-    let (updated, _) = base.update(&x).unwrap();
+    let (updated, report) = base.update(&x).unwrap();
     let lin = base.linearise(&x, &updated).unwrap();
     let own: Vec<usize> = lin
         .intersection_curves()
@@ -95,8 +97,10 @@ fn check_forward(s: f64) {
     let h = 2e-3;
     let plus: Vec<Point3> = x.iter().zip(&dp).map(|(p, d)| p + d * h).collect();
     let minus: Vec<Point3> = x.iter().zip(&dp).map(|(p, d)| p - d * h).collect();
-    let fp = flatten_model(&base.update(&plus).unwrap().0, &own);
-    let fm = flatten_model(&base.update(&minus).unwrap().0, &own);
+    let (up, rp) = base.update(&plus).unwrap();
+    let (um, rm) = base.update(&minus).unwrap();
+    assert_eq!((rp.refits, rm.refits), (report.refits, report.refits));
+    let (fp, fm) = (flatten_model(&up, &own), flatten_model(&um, &own));
     let fd: Vec<f64> = fp
         .iter()
         .zip(&fm)
@@ -137,17 +141,32 @@ fn check_forward(s: f64) {
         moved_by_field > 1e-3,
         "junction rows equal the field: {moved_by_field}"
     );
+    report.refits
 }
 
 #[test]
 fn forward_product_matches_central_differences_off_the_baseline() {
-    check_forward(1.0);
+    assert_eq!(check_forward(1.0, &UpdateOptions::default()), 0);
+}
+
+/// A junction tolerance the moved junction misses: the update re-fits it (degrees raised,
+/// new control nodes), and the product differentiates the re-fit (foot seeds, Eq. 12 at the
+/// new nodes) as it ran.
+fn refit_options() -> UpdateOptions {
+    UpdateOptions::default().with_junction_rel_tol(REFIT_TOL)
+}
+
+const REFIT_TOL: f64 = 5e-10;
+
+#[test]
+fn forward_product_through_a_refit_matches_central_differences() {
+    assert!(check_forward(1.0, &refit_options()) > 0);
 }
 
 #[test]
 fn forward_product_matches_central_differences_at_the_baseline() {
     // nothing changed at the baseline: curves and corners are differentiated as re-solved
-    check_forward(0.0);
+    assert_eq!(check_forward(0.0, &UpdateOptions::default()), 0);
 }
 
 fn random_cotangent(lin: &intersect::update::ModelLinearisation, seed: u64) -> ModelTangent {
@@ -182,21 +201,24 @@ fn random_cotangent(lin: &intersect::update::ModelLinearisation, seed: u64) -> M
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 6, ..ProptestConfig::default() })]
-    /// ⟨J dP, ȳ⟩ = ⟨dP, Jᵀ ȳ⟩ to 1e-10 relative.
+    /// ⟨J dP, ȳ⟩ = ⟨dP, Jᵀ ȳ⟩ to 1e-10 relative, without and with a re-fit.
     #[test]
     fn dot_product_test(seed in 0u64..1_000_000, k in 0.0f64..3.0) {
         let db = load("wing_body.ron");
-        let base = ModelBaseline::new(&db, &UpdateOptions::default()).unwrap();
-        let x = moved(&db, 1.0, 0.3);
-        let (updated, _) = base.update(&x).unwrap();
-        let lin = base.linearise(&x, &updated).unwrap();
-        let dp: Vec<Vector3> = db.control_points().iter().map(|p| field(p, k)).collect();
-        let ybar = random_cotangent(&lin, seed);
-        let jdp = lin.jvp(&dp).unwrap();
-        let jty = lin.vjp(&ybar).unwrap();
-        let a = jdp.dot(&ybar);
-        let b: f64 = dp.iter().zip(&jty).map(|(p, q)| p.dot(q)).sum();
-        let scale = jdp.dot(&jdp).sqrt() * ybar.dot(&ybar).sqrt();
-        prop_assert!((a - b).abs() <= 1e-10 * scale, "{a} vs {b} (scale {scale})");
+        // without and with a re-fit of the junction
+        for opts in [UpdateOptions::default(), refit_options()] {
+            let base = ModelBaseline::new(&db, &opts).unwrap();
+            let x = moved(&db, 1.0, 0.3);
+            let (updated, _) = base.update(&x).unwrap();
+            let lin = base.linearise(&x, &updated).unwrap();
+            let dp: Vec<Vector3> = db.control_points().iter().map(|p| field(p, k)).collect();
+            let ybar = random_cotangent(&lin, seed);
+            let jdp = lin.jvp(&dp).unwrap();
+            let jty = lin.vjp(&ybar).unwrap();
+            let a = jdp.dot(&ybar);
+            let b: f64 = dp.iter().zip(&jty).map(|(p, q)| p.dot(q)).sum();
+            let scale = jdp.dot(&jdp).sqrt() * ybar.dot(&ybar).sqrt();
+            prop_assert!((a - b).abs() <= 1e-10 * scale, "{a} vs {b} (scale {scale})");
+        }
     }
 }
