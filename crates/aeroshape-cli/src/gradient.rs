@@ -1,7 +1,7 @@
 //! `aeroshape gradient CASE.ron [--dv DV.ron] --sensitivity SENS -o grad.json|grad.csv`:
 //! dJ/dx for every design variable from a flow adjoint's dJ/dX (issue 22), by the reverse
 //! product of the whole chain at x (`aeroshape::study::ChainLinearisation`): one adjoint
-//! deformation solve for a volume file, none for a surface file.
+//! deformation solve for a volume file (CSV or VTU), none for a surface file.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -25,9 +25,10 @@ pub struct GradientArgs {
     #[arg(long, value_name = "DV.ron")]
     pub dv: Option<PathBuf>,
     /// dJ/dX of the grid the case names, in SU2's layout: the volume CSV of RESTART_ASCII
-    /// ("PointID", …, "Sensitivity_x", "Sensitivity_y", "Sensitivity_z") or a surface CSV
-    /// ("Point", …) with the wall nodes only.
-    #[arg(long, value_name = "SENS.csv")]
+    /// ("PointID", …, "Sensitivity_x", "Sensitivity_y", "Sensitivity_z"), a surface CSV
+    /// ("Point", …) with the wall nodes only, or a `.vtu` with a point-data vector
+    /// "Sensitivity" on every grid node (its points must be the grid's at the design vector).
+    #[arg(long, value_name = "SENS.csv|SENS.vtu")]
     pub sensitivity: PathBuf,
     /// Output: JSON (`.json`) or CSV (`.csv`: variable,gradient).
     #[arg(short, long, value_name = "grad.json")]
@@ -90,6 +91,19 @@ pub fn run(a: GradientArgs) -> anyhow::Result<()> {
         study.wall_nodes(),
     )?;
     let lin = study.linearise(&x)?;
+    if let Some(p) = &sens.points {
+        // a VTU has no point IDs: its points must be the grid's nodes at x (1e-6 of the
+        // grid's size: single-precision coordinates pass, another node order does not)
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for q in lin.coords() {
+            for c in 0..3 {
+                lo[c] = lo[c].min(q[c]);
+                hi[c] = hi[c].max(q[c]);
+            }
+        }
+        let diag = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
+        sensitivity::check_points(&a.sensitivity, p, lin.coords(), 1e-6 * diag)?;
+    }
     let g = match sens.layout {
         Layout::Volume => lin.vjp(&sens.values)?,
         Layout::Surface => lin.vjp_wall(&sens.values)?,

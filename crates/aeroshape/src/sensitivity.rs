@@ -7,10 +7,16 @@
 //! * **surface** (`SURFACE_CSV`, SU2's `CCSVFileWriter`, e.g. `surface_sens.csv`): the same
 //!   with the first column `"Point"`, one row per node of the written markers.
 //!
+//! * **VTU** (`.vtu`: SU2's `PARAVIEW_XML` volume output, or any VTK XML writer): a
+//!   point-data vector named `Sensitivity` (2 or 3 components), one per grid node in the
+//!   grid's node order (read by `mesh::vtu::read_with_point_data`). A VTU has no point IDs:
+//!   its points are returned ([`Sensitivity::points`]) and [`check_points`] compares them
+//!   with the grid's nodes.
+//!
 //! Node indices are the grid's, from 0 (SU2's global point index of the same `.su2` grid).
 //! A volume file must give every node exactly once; a surface file every wall node exactly
 //! once (and nothing else). Any other file is an error naming the file and the first bad
-//! line (1-based). Without a `Sensitivity_z` column (a 2-D solver) z is zero.
+//! line (1-based) or point. Without a `Sensitivity_z` column (a 2-D solver) z is zero.
 
 use std::path::{Path, PathBuf};
 
@@ -31,8 +37,11 @@ pub struct Sensitivity {
     /// dJ/dX per grid node (zero where the file gives nothing: off the wall of a surface
     /// file).
     pub values: Vec<[f64; 3]>,
-    /// Rows read.
+    /// Rows read (points of a VTU).
     pub rows: usize,
+    /// The file's point coordinates, where it gives them instead of point IDs (a VTU), in
+    /// the grid's node order: to be checked against the grid ([`check_points`]).
+    pub points: Option<Vec<[f64; 3]>>,
 }
 
 /// Errors of [`read`]; each names the file and, where there is one, the line.
@@ -58,6 +67,17 @@ pub enum SensitivityError {
         /// What is wrong.
         reason: String,
     },
+    /// A VTU file that does not fit the grid (its points or its `Sensitivity` array).
+    #[error("{}: {reason}", file.display())]
+    Points {
+        /// The file.
+        file: PathBuf,
+        /// What is wrong, naming the first bad point.
+        reason: String,
+    },
+    /// A VTU file that is not a valid VTK XML unstructured grid.
+    #[error(transparent)]
+    Vtu(#[from] mesh::Error),
 }
 
 fn bad(file: &Path, line: usize, reason: impl Into<String>) -> SensitivityError {
@@ -71,6 +91,12 @@ fn bad(file: &Path, line: usize, reason: impl Into<String>) -> SensitivityError 
 /// Reads the sensitivity file `file` for a grid of `n_nodes` nodes whose wall nodes are
 /// `wall` (one flag per node). See the module doc.
 pub fn read(file: &Path, n_nodes: usize, wall: &[bool]) -> Result<Sensitivity, SensitivityError> {
+    if file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vtu"))
+    {
+        return read_vtu(file, n_nodes);
+    }
     let text = std::fs::read_to_string(file).map_err(|source| SensitivityError::Read {
         file: file.to_path_buf(),
         source,
@@ -201,7 +227,103 @@ pub fn parse(
         layout,
         values,
         rows,
+        points: None,
     })
+}
+
+fn bad_points(file: &Path, reason: impl Into<String>) -> SensitivityError {
+    SensitivityError::Points {
+        file: file.to_path_buf(),
+        reason: reason.into(),
+    }
+}
+
+/// Reads the `Sensitivity` point-data vector of the VTU `file` for a grid of `n_nodes`
+/// nodes (module doc): volume layout, with the file's points.
+pub fn read_vtu(file: &Path, n_nodes: usize) -> Result<Sensitivity, SensitivityError> {
+    let f = std::fs::File::open(file).map_err(|source| SensitivityError::Read {
+        file: file.to_path_buf(),
+        source,
+    })?;
+    let (m, data) = mesh::vtu::read_with_point_data(std::io::BufReader::new(f), file)?;
+    let Some(a) = data.iter().find(|a| a.name == "Sensitivity") else {
+        let names: Vec<&str> = data.iter().map(|a| a.name.as_str()).collect();
+        return Err(bad_points(
+            file,
+            format!(
+                "no point-data array named \"Sensitivity\" (point data: {names:?}; SU2 writes it with the SENSITIVITY volume output)"
+            ),
+        ));
+    };
+    if !(a.components == 2 || a.components == 3) {
+        return Err(bad_points(
+            file,
+            format!(
+                "\"Sensitivity\" has {} components, not a vector of 2 or 3",
+                a.components
+            ),
+        ));
+    }
+    let np = m.n_nodes();
+    if np != n_nodes {
+        let first = if np > n_nodes {
+            format!("point {n_nodes} is not a node of the grid")
+        } else {
+            format!("first missing: point {np}")
+        };
+        return Err(bad_points(
+            file,
+            format!("{np} points for {n_nodes} grid nodes; {first}"),
+        ));
+    }
+    let mut values = Vec::with_capacity(np);
+    for i in 0..np {
+        let v = a.at(i);
+        if let Some(c) = v.iter().position(|x| !x.is_finite()) {
+            return Err(bad_points(
+                file,
+                format!("point {i}: \"Sensitivity\" component {c} is {}", v[c]),
+            ));
+        }
+        values.push([v[0], v[1], v.get(2).copied().unwrap_or(0.0)]);
+    }
+    Ok(Sensitivity {
+        layout: Layout::Volume,
+        values,
+        rows: np,
+        points: Some(m.coords),
+    })
+}
+
+/// Checks the points of a sensitivity file (`points`, [`Sensitivity::points`]) against the
+/// grid's nodes `grid` (at the design vector the sensitivities belong to): the first point
+/// farther than `tol` from its node is an error naming the file and the point (a file of
+/// another grid, or of this grid in another node order).
+pub fn check_points(
+    file: &Path,
+    points: &[[f64; 3]],
+    grid: &[[f64; 3]],
+    tol: f64,
+) -> Result<(), SensitivityError> {
+    if points.len() != grid.len() {
+        return Err(bad_points(
+            file,
+            format!("{} points for {} grid nodes", points.len(), grid.len()),
+        ));
+    }
+    for (i, (p, g)) in points.iter().zip(grid).enumerate() {
+        let d = ((p[0] - g[0]).powi(2) + (p[1] - g[1]).powi(2) + (p[2] - g[2]).powi(2)).sqrt();
+        if d.is_nan() || d > tol {
+            return Err(bad_points(
+                file,
+                format!(
+                    "point {i} at ({:.6e}, {:.6e}, {:.6e}) is {d:.3e} from the grid's node {i} at ({:.6e}, {:.6e}, {:.6e}) (tolerance {tol:.1e}): the file is not of this grid at this design vector, or not in its node order",
+                    p[0], p[1], p[2], g[0], g[1], g[2]
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -564,8 +564,38 @@ impl Vtu<'_> {
     }
 }
 
-/// Reads a VTK XML unstructured grid from `r`; `file` names the input in errors.
-pub fn read<R: Read>(mut r: R, file: &Path) -> Result<Mesh> {
+/// One `<PointData>` array of a VTU file ([`read_with_point_data`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointArray {
+    /// Its `Name`.
+    pub name: String,
+    /// Its `NumberOfComponents` (1 for a scalar).
+    pub components: usize,
+    /// The values point by point, the components of a point contiguous, as f64.
+    pub values: Vec<f64>,
+}
+
+impl PointArray {
+    /// The value of point `i` (its `components` numbers).
+    pub fn at(&self, i: usize) -> &[f64] {
+        &self.values[i * self.components..(i + 1) * self.components]
+    }
+}
+
+/// Reads a VTK XML unstructured grid from `r`; `file` names the input in errors. Point and
+/// cell data other than the `marker` cell array are not read ([`read_with_point_data`]
+/// reads the point data).
+pub fn read<R: Read>(r: R, file: &Path) -> Result<Mesh> {
+    read_impl(r, file, false).map(|(m, _)| m)
+}
+
+/// [`read`], also returning every `<PointData>` array, in the file's order, each checked to
+/// hold one tuple per point (an error naming the array otherwise).
+pub fn read_with_point_data<R: Read>(r: R, file: &Path) -> Result<(Mesh, Vec<PointArray>)> {
+    read_impl(r, file, true)
+}
+
+fn read_impl<R: Read>(mut r: R, file: &Path, point_data: bool) -> Result<(Mesh, Vec<PointArray>)> {
     let file = file.display().to_string();
     let mut data = Vec::new();
     r.read_to_end(&mut data).map_err(|source| Error::Io {
@@ -724,6 +754,29 @@ pub fn read<R: Read>(mut r: R, file: &Path) -> Result<Mesh> {
             format!("Points: node {} has a non-finite coordinate", i / 3),
         ));
     }
+    let mut pdata = Vec::new();
+    for a in arrays
+        .iter()
+        .filter(|a| point_data && a.section == "PointData")
+    {
+        let values = vtu.values(a)?;
+        if a.ncomp == 0 || Some(values.len()) != np.checked_mul(a.ncomp) {
+            return Err(vtu.err(
+                a.at,
+                format!(
+                    "PointData {}: {} values for {np} points of {} components",
+                    a.name,
+                    values.len(),
+                    a.ncomp
+                ),
+            ));
+        }
+        pdata.push(PointArray {
+            name: a.name.clone(),
+            components: a.ncomp,
+            values,
+        });
+    }
     let conn_a =
         get("Cells", Some("connectivity")).ok_or_else(|| vtu.err(0, "no connectivity array"))?;
     let offs_a = get("Cells", Some("offsets")).ok_or_else(|| vtu.err(0, "no offsets array"))?;
@@ -833,7 +886,7 @@ pub fn read<R: Read>(mut r: R, file: &Path) -> Result<Mesh> {
             elements,
         });
     }
-    Ok(mesh)
+    Ok((mesh, pdata))
 }
 
 fn find(h: &[u8], n: &[u8]) -> Option<usize> {

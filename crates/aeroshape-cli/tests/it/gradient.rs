@@ -243,3 +243,120 @@ fn surface_layout_gives_the_wall_product_and_bad_files_name_their_line() {
         "{err}"
     );
 }
+
+fn python_has_meshio() -> bool {
+    Command::new("python3")
+        .args(["-c", "import meshio"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false)
+}
+
+/// meshio (the independent writer) turns our VTU of the grid at x into one with the
+/// point-data vector "Sensitivity" = the test's weights; `keep` drops the last node (and
+/// its cells), `reverse` reverses the node order (cells renumbered).
+const MESHIO_SENS: &str = r#"
+import sys, meshio, numpy as np
+m = meshio.read(sys.argv[1])
+mode = sys.argv[3]
+pts = m.points
+i = np.arange(len(pts), dtype=float)
+w = np.column_stack([np.sin(0.37 * i), np.cos(0.11 * i + 0.5), np.sin(0.23 * i + 1.0)])
+cells = [(c.type, c.data) for c in m.cells]
+if mode == "short":
+    n = len(pts) - 1
+    cells = [(t, d[(d < n).all(axis=1)]) for t, d in cells]
+    pts, w = pts[:n], w[:n]
+elif mode == "reverse":
+    n = len(pts)
+    cells = [(t, n - 1 - d) for t, d in cells]
+    pts, w = pts[::-1], w[::-1]
+meshio.write(sys.argv[2], meshio.Mesh(pts, cells, point_data={"Sensitivity": w}))
+"#;
+
+/// A `.vtu` with a point-data vector "Sensitivity", written by meshio: the same gradient
+/// as the SU2 volume CSV of the same values (itself checked against central differences
+/// above); a file with a node missing, or in another node order, is exit 1 naming the file
+/// and the first bad point.
+#[test]
+fn vtu_sensitivity_written_by_meshio_gives_the_csv_gradient() {
+    if !python_has_meshio() {
+        eprintln!("SKIPPED: python3 module meshio not available");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let case = tight_case(dir.path());
+    let dv = case_dir().join("dv.ron");
+    let study = Study::load(&case).unwrap();
+    let x = study
+        .vector_from_values(&load_design_values(&dv).unwrap())
+        .unwrap();
+    let n = study.baseline().n_nodes();
+    let grid = study.evaluate(&x).unwrap().grid;
+    let ours = dir.path().join("grid_at_x.vtu");
+    let mut buf = Vec::new();
+    mesh::vtu::write(&grid, &mesh::vtu::VtuOptions::default(), &mut buf).unwrap();
+    std::fs::write(&ours, buf).unwrap();
+    let meshio = |name: &str, mode: &str| -> PathBuf {
+        let p = dir.path().join(name);
+        let o = Command::new("python3")
+            .args(["-c", MESHIO_SENS])
+            .arg(&ours)
+            .arg(&p)
+            .arg(mode)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        p
+    };
+    let gradient = |sens: &Path, out: &str| -> (Output, PathBuf) {
+        let out = dir.path().join(out);
+        let o = run(&[
+            case.as_os_str(),
+            "--dv".as_ref(),
+            dv.as_os_str(),
+            "--sensitivity".as_ref(),
+            sens.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ]);
+        (o, out)
+    };
+    let vtu = meshio("sens.vtu", "full");
+    let (o, out) = gradient(&vtu, "grad_vtu.json");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let gv = gradient_of(&out);
+    let csv = dir.path().join("restart_adj.csv");
+    std::fs::write(&csv, su2_volume(&grid.coords, &weights(n))).unwrap();
+    let (o, out) = gradient(&csv, "grad_csv.json");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let gc = gradient_of(&out);
+    let size = gc.iter().fold(0.0f64, |a, (_, v)| a.max(v.abs()));
+    for ((n1, a), (n2, b)) in gv.iter().zip(&gc) {
+        assert_eq!(n1, n2);
+        // numpy's and Rust's sin/cos may differ in the last place
+        assert!((a - b).abs() <= 1e-12 * size, "{n1}: vtu {a} vs csv {b}");
+    }
+    // one node missing: exit 1, the file and the first missing point named
+    let short = meshio("short.vtu", "short");
+    let (o, _) = gradient(&short, "g_short.json");
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let want = format!(
+        "{}: {} points for {n} grid nodes; first missing: point {}",
+        short.display(),
+        n - 1,
+        n - 1
+    );
+    assert!(err.contains(&want), "{err}");
+    // the node order reversed: the first point off its node is named
+    let rev = meshio("reversed.vtu", "reverse");
+    let (o, _) = gradient(&rev, "g_rev.json");
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("{}: point 0 at (", rev.display()))
+            && err.contains("not in its node order"),
+        "{err}"
+    );
+}

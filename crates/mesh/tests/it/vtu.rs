@@ -85,3 +85,76 @@ fn zlib_compressed_vtu_written_by_meshio() {
     assert_eq!(v.markers.len(), 1);
     assert_eq!(v.markers[0].elements.len(), n_tri);
 }
+
+/// The point data of VTU files written by meshio (`fixtures/mesh/make_sensitivity_vtu.py`:
+/// zlib-compressed binary and ASCII): every `<PointData>` array with its components, the
+/// "Sensitivity" vector equal to the field the script evaluated at the points read.
+#[test]
+fn point_data_written_by_meshio() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/mesh");
+    // binary: the f64 values exact (libm's last digit aside); ASCII: meshio prints 12
+    // significant digits, of the coordinates too
+    for (name, tol) in [
+        ("box_sensitivity_zlib.vtu", 4.0 * f64::EPSILON),
+        ("box_sensitivity_ascii.vtu", 1e-10),
+    ] {
+        let f = std::fs::File::open(dir.join(name)).unwrap();
+        let (m, data) = mesh::vtu::read_with_point_data(f, name.as_ref()).unwrap();
+        assert_eq!(m.n_nodes(), 228, "{name}");
+        let names: Vec<(&str, usize)> = data
+            .iter()
+            .map(|a| (a.name.as_str(), a.components))
+            .collect();
+        assert_eq!(names, [("Pressure", 1), ("Sensitivity", 3)], "{name}");
+        let s = &data[1];
+        for (i, p) in m.coords.iter().enumerate() {
+            let [x, y, z] = *p;
+            let want = [(3.0 * x).sin() + y, (2.0 * y).cos() * z, x * y * z - 0.5];
+            for c in 0..3 {
+                assert!(
+                    (s.at(i)[c] - want[c]).abs() <= tol,
+                    "{name}: point {i}: {:?} vs {want:?}",
+                    s.at(i)
+                );
+            }
+            assert!((data[0].at(i)[0] - (x + 2.0 * y + 3.0 * z)).abs() <= 4.0 * tol);
+        }
+        // `read` gives the same grid without the arrays
+        let f = std::fs::File::open(dir.join(name)).unwrap();
+        assert_eq!(mesh::vtu::read(f, name.as_ref()).unwrap().coords, m.coords);
+    }
+}
+
+/// Our own writer's point data read back, and a point array of the wrong length named.
+#[test]
+fn point_data_round_trip_and_wrong_length() {
+    let a = read_su2(&shared_su2("mesh_brick_tets_ffd.su2"));
+    let disp: Vec<[f64; 3]> = (0..a.n_nodes())
+        .map(|i| [i as f64, -0.5 * i as f64, 1e-300])
+        .collect();
+    for enc in [VtuEncoding::AppendedRaw, VtuEncoding::Base64] {
+        let mut buf = Vec::new();
+        let opts = VtuOptions::default()
+            .with_encoding(enc)
+            .with_displacement(&disp);
+        mesh::vtu::write(&a, &opts, &mut buf).unwrap();
+        let (_, data) = mesh::vtu::read_with_point_data(&buf[..], "mem.vtu".as_ref()).unwrap();
+        let d = data.iter().find(|d| d.name == "displacement").unwrap();
+        assert_eq!(d.components, 3);
+        for (i, v) in disp.iter().enumerate() {
+            assert_eq!(d.at(i), v);
+        }
+    }
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/mesh");
+    let txt = std::fs::read_to_string(dir.join("box_sensitivity_ascii.vtu")).unwrap();
+    let bad = txt.replace(
+        "Name=\"Sensitivity\" NumberOfComponents=\"3\"",
+        "Name=\"Sensitivity\" NumberOfComponents=\"4\"",
+    );
+    let e = mesh::vtu::read_with_point_data(bad.as_bytes(), "s.vtu".as_ref()).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("PointData Sensitivity: 684 values for 228 points of 4 components"),
+        "{e}"
+    );
+}
