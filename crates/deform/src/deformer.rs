@@ -15,8 +15,8 @@ use crate::bc::{BoundaryConditions, Classified, NodeRole, classify};
 use crate::error::{Error, Result};
 use crate::guard::{self, cell_quality};
 use crate::operator::Operator;
-use crate::options::DeformOptions;
-use crate::report::{DeformReport, PhaseTimes, StepTime, Steps};
+use crate::options::{DeformOptions, reach_weight};
+use crate::report::{DeformReport, FarField, PhaseTimes, StepTime, Steps};
 use crate::stiffness::Stiffness;
 use crate::support::{Support, Supports};
 use crate::wall_distance::edge_distance;
@@ -194,6 +194,9 @@ pub struct Deformer<'s> {
     pub(crate) before: Summary,
     /// A and its preconditioner at the baseline (None when there is no unknown).
     pub(crate) op: Option<Operator>,
+    /// Every node's distance from the moving boundary along grid edges, on the baseline
+    /// grid (∞ where no moving node is reached).
+    pub(crate) wall_distance: Vec<f64>,
     setup: PhaseTimes,
     /// Seconds per step of the set-up.
     steps: Vec<StepTime>,
@@ -269,6 +272,13 @@ impl<'s> Deformer<'s> {
         opts: &DeformOptions,
         progress: &mut dyn FnMut(&str, usize, usize),
     ) -> Result<Self> {
+        if let Some(l) = opts.rotation_reach
+            && !(l >= 0.0)
+        {
+            return Err(Error::BadOption {
+                reason: format!("the reach of R must be a length ≥ 0 (or infinite), not {l}"),
+            });
+        }
         let mut times = PhaseTimes::default();
         let t = Instant::now();
         progress("setup", 0, 1);
@@ -338,14 +348,32 @@ impl<'s> Deformer<'s> {
         let inv = perm.as_deref().map_or_else(Vec::new, order::inverse);
         let cls = classify(&m2, &bc2, opts.plane_rel_tol, sup2.as_ref())?;
         steps.mark("classify");
-        let sys = build_system(&cls, &adj);
+        let mut sys = build_system(&cls, &adj);
         steps.mark("unknowns");
         times.setup = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let q0 = cell_quality(&m2, &m2.coords);
+        // The wall distance (of the far-field report and of the reach of R) beside the
+        // baseline quality; the one of the wall-distance springs when computed already.
+        let (wall_distance, q0) = rayon::join(
+            || match &distance {
+                Some(d) => d.clone(),
+                None => {
+                    let moving: Vec<bool> = cls
+                        .roles
+                        .iter()
+                        .map(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
+                        .collect();
+                    edge_distance(&adj, &m2.coords, &moving)
+                }
+            },
+            || cell_quality(&m2, &m2.coords),
+        );
         let before = summary(&q0);
         steps.mark("quality");
         times.quality += t.elapsed().as_secs_f64();
+        if let Some(l) = opts.rotation_reach.filter(|l| *l != f64::INFINITY) {
+            sys.reach = wall_distance.iter().map(|&d| reach_weight(d, l)).collect();
+        }
         let op = if sys.node_of.is_empty() {
             None
         } else {
@@ -368,6 +396,7 @@ impl<'s> Deformer<'s> {
             sys,
             before,
             op,
+            wall_distance,
             setup: times,
             steps: steps.list,
         })
@@ -426,6 +455,54 @@ impl<'s> Deformer<'s> {
         )
     }
 
+    /// The far-field report of the grid `coords` (solver numbering): the largest
+    /// displacement from the baseline among the nodes at least the moving boundary's
+    /// bounding-box diagonal away from it ([`FarField`]).
+    fn far_field(&self, coords: &[[f64; 3]]) -> FarField {
+        let x0 = &self.mesh.coords;
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        let mut wall_max = 0.0f64;
+        let disp = |i: usize| {
+            let (a, b) = (x0[i], coords[i]);
+            ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
+        };
+        for (i, r) in self.cls.roles.iter().enumerate() {
+            if matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)) {
+                for q in 0..3 {
+                    lo[q] = lo[q].min(x0[i][q]);
+                    hi[q] = hi[q].max(x0[i][q]);
+                }
+                wall_max = wall_max.max(disp(i));
+            }
+        }
+        let distance = if lo[0] <= hi[0] {
+            ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
+        } else {
+            0.0
+        };
+        let mut out = FarField {
+            distance,
+            wall_max_displacement: wall_max,
+            ..FarField::default()
+        };
+        for (i, &d) in self.wall_distance.iter().enumerate() {
+            // A node no moving node reaches (∞) is far too.
+            if d >= distance {
+                out.nodes += 1;
+                let u = disp(i);
+                if out.node.is_none() || u > out.max_displacement {
+                    out.max_displacement = u;
+                    out.node = Some(if self.perm.is_some() {
+                        self.inv[i]
+                    } else {
+                        i as u32
+                    });
+                }
+            }
+        }
+        out
+    }
+
     fn run(
         &self,
         values: Prescribed,
@@ -477,6 +554,7 @@ impl<'s> Deformer<'s> {
             guard::run(self, &bc, warm, exact, progress).map_err(|e| e.renumbered(&self.inv))?;
         d.state.values = bc.displacements.iter().map(|e| e.1).collect();
         d.state.exact = exact.map(<[[f64; 3]]>::to_vec);
+        d.report.far_field = self.far_field(&d.coords);
         if let Some(perm) = &self.perm {
             d.coords = perm.iter().map(|&p| d.coords[p as usize]).collect();
             for (v, _) in d.supports.iter_mut() {

@@ -12,7 +12,7 @@ use crate::bc::{BoundaryConditions, NodeRole};
 use crate::deformer::{Deformed, Deformer, SolverState};
 use crate::error::{Error, Result};
 use crate::increment::{Attempt, Context, Increment};
-use crate::report::{DeformReport, PhaseTimes};
+use crate::report::{DeformReport, FarField, PhaseTimes};
 use crate::support::{SupKind, Support};
 
 /// Signed quality of every cell (canonical order; NaN for kinds without a measure) for the
@@ -163,6 +163,7 @@ pub(crate) fn run(
             seconds: times,
             setup_steps: Vec::new(),
             notes,
+            far_field: FarField::default(),
         };
         let Attempt { cur, params } = st;
         let supports = cls

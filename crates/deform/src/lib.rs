@@ -66,7 +66,7 @@ pub use error::{Error, Result};
 pub use guard::cell_quality;
 pub use linearise::{Linearisation, Product};
 pub use options::{DeformOptions, SolverKind};
-pub use report::{DeformReport, PhaseTimes, StepTime};
+pub use report::{DeformReport, FarField, PhaseTimes, StepTime};
 pub use request::Request;
 pub use stiffness::Stiffness;
 pub use support::{Support, Supports};

@@ -76,6 +76,14 @@ pub struct DeformOptions {
     pub stiffness: Stiffness,
     /// Use the adaptation matrices R (Eqs. 18–26); `false` gives the plain spring system.
     pub adapt_rotation: bool,
+    /// How far R reaches from the moving boundary: `None` (default), everywhere R of Eq. 26
+    /// (the paper's); `Some(L)`, R blended to the identity with the distance d of each node
+    /// from the moving boundary (along grid edges, on the baseline grid): its rotation angle
+    /// θ becomes θ' with sin(θ'/2) = φ sin(θ/2), φ = 1 − 3t² + 2t³ for t = d / L ≤ 1 and
+    /// φ = 0 beyond (R = I from d = L on). `Some(0.0)` gives R = I everywhere, as
+    /// `adapt_rotation: false`; `Some(f64::INFINITY)` is `None`. See docs/crates/deform.md,
+    /// "How far R reaches".
+    pub rotation_reach: Option<f64>,
     /// Linear solver.
     pub solver: SolverKind,
     /// Relative residual |b − A Δx| / |b| at which a solve stops.
@@ -111,6 +119,7 @@ impl Default for DeformOptions {
         Self {
             stiffness: Stiffness::default(),
             adapt_rotation: true,
+            rotation_reach: None,
             solver: SolverKind::default(),
             rel_tol: 1e-8,
             max_iters: 20_000,
@@ -123,5 +132,32 @@ impl Default for DeformOptions {
             slide_rel_tol: 1e-9,
             max_slide_iters: 50,
         }
+    }
+}
+
+/// The weight φ of R at the distance `d` from the moving boundary for the reach `reach`
+/// ([`DeformOptions::rotation_reach`]): 1 − 3t² + 2t³ for t = d / reach ≤ 1, 0 beyond; 0
+/// everywhere for a reach of 0, 1 everywhere for an infinite reach.
+///
+/// ```
+/// use deform::options::reach_weight;
+/// assert_eq!(reach_weight(0.0, 2.0), 1.0);
+/// assert_eq!(reach_weight(1.0, 2.0), 0.5);
+/// assert_eq!(reach_weight(2.0, 2.0), 0.0);
+/// assert_eq!(reach_weight(0.0, 0.0), 0.0);
+/// assert_eq!(reach_weight(1e9, f64::INFINITY), 1.0);
+/// ```
+pub fn reach_weight(d: f64, reach: f64) -> f64 {
+    if reach == f64::INFINITY {
+        return 1.0;
+    }
+    if reach <= 0.0 {
+        return 0.0;
+    }
+    let t = d / reach;
+    if t >= 1.0 {
+        0.0
+    } else {
+        1.0 - t * t * (3.0 - 2.0 * t)
     }
 }

@@ -117,4 +117,25 @@ pub struct DeformReport {
     pub setup_steps: Vec<StepTime>,
     /// Messages of the guard (increments, inverted cells allowed).
     pub notes: Vec<String>,
+    /// How far the motion reaches: the largest displacement far from the moving boundary.
+    pub far_field: FarField,
+}
+
+/// The largest displacement in the far field: among the nodes whose distance from the
+/// moving boundary (along grid edges, on the baseline grid; the distance of
+/// [`crate::DeformOptions::rotation_reach`]) is at least the moving boundary's bounding-box
+/// diagonal (nodes that no moving node reaches included).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct FarField {
+    /// The distance from the moving boundary from which a node is in the far field: the
+    /// bounding-box diagonal of the moving nodes (0 without moving nodes).
+    pub distance: f64,
+    /// Nodes in the far field.
+    pub nodes: usize,
+    /// Largest displacement of a far-field node (0 when there is none).
+    pub max_displacement: f64,
+    /// That node (input numbering); `None` when the far field is empty.
+    pub node: Option<u32>,
+    /// Largest displacement of a moving node (prescribed motion), for scale.
+    pub wall_max_displacement: f64,
 }

@@ -9,6 +9,10 @@
 //! between (docs/crates/deform.md, "R: adaptation matrices"). R_ij is the normalised sum of
 //! the two end nodes' quaternions — the geodesic midpoint of R_i and R_j, a proper rotation,
 //! at the cost of a few flops per edge instead of an SVD per edge.
+//!
+//! With a reach ([`crate::DeformOptions::rotation_reach`]) every node's quaternion is then
+//! blended to the identity by its weight φ ([`blend`]): the skin's before Eq. 26 (they are
+//! its boundary values), the unknowns' after.
 
 use mesh::Mesh;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
@@ -116,6 +120,19 @@ pub(crate) fn node_quaternions(
     (qv, qw, len, any_rot)
 }
 
+/// The rotation (u, w) (unit quaternion, w ≥ 0) blended to the identity by the weight `phi`
+/// of its node ([`crate::options::reach_weight`]): (φ u, √(1 − φ²|u|²)), so that
+/// sin(θ'/2) = φ sin(θ/2) about the same axis; unchanged, bit for bit, for φ = 1.
+#[inline]
+pub(crate) fn blend(u: V3, w: f64, phi: f64) -> (V3, f64) {
+    if phi == 1.0 {
+        return (u, w);
+    }
+    let b = [phi * u[0], phi * u[1], phi * u[2]];
+    let s2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+    (b, (1.0 - s2).max(0.0).sqrt())
+}
+
 /// The rotation of an unknown from its Eq. 26 solution `v` (the quaternion's vector part):
 /// (v, √(1 − |v|²)), or (v / |v|, 0) when |v| > 1 (solver round-off: the discrete maximum
 /// principle keeps |v| ≤ 1).
@@ -204,8 +221,16 @@ impl RField {
             };
         }
         let rots = element_quaternions(mesh, cls, op, cur, target);
-        let (mut qv, mut qw, _, any_rot) = node_quaternions(cls, n, &rots);
+        let (mut qv, mut qw, _, mut any_rot) = node_quaternions(cls, n, &rots);
         drop(rots);
+        if !sys.reach.is_empty() {
+            // The reach of R (`DeformOptions::rotation_reach`): the skin's rotations are
+            // blended first (they are the Eq. 26 boundary values), the unknowns' below.
+            for i in 0..n {
+                (qv[i], qw[i]) = blend(qv[i], qw[i], sys.reach[i]);
+            }
+            any_rot = qv.iter().any(|u| *u != [0.0; 3]);
+        }
         let mut solution = Vec::new();
         let mut iterations = 0;
         if any_rot {
@@ -219,6 +244,7 @@ impl RField {
             iterations = it;
             for (k, &i) in sys.node_of.iter().enumerate() {
                 let (u, w) = unknown_quaternion(xv[k]);
+                let (u, w) = blend(u, w, sys.reach_weight(i as usize));
                 qv[i as usize] = u;
                 qw[i as usize] = w;
             }

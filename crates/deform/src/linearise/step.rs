@@ -338,6 +338,11 @@ impl Step {
                     for t in 0..4 {
                         dq[i][t] = (a[t] - qh[t] * p) / l;
                     }
+                    // The reach: the blended boundary values of Eq. 26.
+                    let phi = sys.reach_weight(i);
+                    if phi != 1.0 {
+                        dq[i] = blend_d(self.q[i], [dq[i][0], dq[i][1], dq[i][2]], phi);
+                    }
                 }
             }
             // Eq. 26 linearised.
@@ -381,9 +386,7 @@ impl Step {
             iterations += rep.iterations;
             for (k, &i) in sys.node_of.iter().enumerate() {
                 let i = i as usize;
-                let (u, w) = ([self.q[i][0], self.q[i][1], self.q[i][2]], self.q[i][3]);
-                let dw = if w > 0.0 { -dot(u, du[k]) / w } else { 0.0 };
-                dq[i] = [du[k][0], du[k][1], du[k][2], dw];
+                dq[i] = blend_d(self.q[i], du[k], sys.reach_weight(i));
             }
         }
         // Eq. 21 linearised: the right-hand side.
@@ -521,16 +524,7 @@ impl Step {
                     .iter()
                     .map(|&i| {
                         let i = i as usize;
-                        let (qb, q) = (qbar[i], self.q[i]);
-                        if q[3] > 0.0 {
-                            [
-                                qb[0] - qb[3] * q[0] / q[3],
-                                qb[1] - qb[3] * q[1] / q[3],
-                                qb[2] - qb[3] * q[2] / q[3],
-                            ]
-                        } else {
-                            [qb[0], qb[1], qb[2]]
-                        }
+                        blend_d_t(self.q[i], qbar[i], sys.reach_weight(i))
                     })
                     .collect();
                 let mut z = vec![[0.0; 3]; nu];
@@ -565,11 +559,16 @@ impl Step {
                         }
                     });
                 }
-                // The skin nodes' normalisation, then the elements.
+                // The skin nodes' blend (the reach), normalisation, then the elements.
                 let mut accbar = vec![[0.0f64; 4]; n];
                 for i in 0..n {
                     let l = self.node_len[i];
                     if l > 0.0 {
+                        let phi = sys.reach_weight(i);
+                        if phi != 1.0 {
+                            let v = blend_d_t(self.q[i], qbar[i], phi);
+                            qbar[i] = [v[0], v[1], v[2], 0.0];
+                        }
                         let (a, qh) = (qbar[i], self.node_q[i]);
                         let p: f64 = (0..4).map(|t| qh[t] * a[t]).sum();
                         for t in 0..4 {
@@ -608,6 +607,31 @@ impl Step {
         }
         Ok((cbar, iterations))
     }
+}
+
+/// The derivative of a node's blended quaternion `q` = (φ u, w) (`crate::rfield::blend`,
+/// w = √(1 − φ²|u|²); for φ = 1 the unblended w = √(1 − |u|²) of an unknown) for the
+/// derivative `du` of its unblended vector part u: (φ du, −φ u·du / w) with φ u the vector
+/// part of `q` (0 for w = 0).
+fn blend_d(q: [f64; 4], du: V3, phi: f64) -> [f64; 4] {
+    let v = [phi * du[0], phi * du[1], phi * du[2]];
+    let dw = if q[3] > 0.0 {
+        -dot([q[0], q[1], q[2]], v) / q[3]
+    } else {
+        0.0
+    };
+    [v[0], v[1], v[2], dw]
+}
+
+/// The transpose of [`blend_d`]: the weight of du for the weights `qbar` of the blended
+/// quaternion's four parts.
+fn blend_d_t(q: [f64; 4], qbar: [f64; 4], phi: f64) -> V3 {
+    let f = if q[3] > 0.0 { qbar[3] / q[3] } else { 0.0 };
+    [
+        phi * (qbar[0] - f * q[0]),
+        phi * (qbar[1] - f * q[1]),
+        phi * (qbar[2] - f * q[2]),
+    ]
 }
 
 /// Fails when a linear solve of the linearisation did not converge.

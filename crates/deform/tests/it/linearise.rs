@@ -142,9 +142,12 @@ fn check(what: &str, r: (f64, f64, usize), increments: usize) {
 fn forward_product_matches_central_differences_with_and_without_r() {
     let m = box_grid();
     let nodes = wing_nodes(&m);
-    for rot in [true, false] {
+    // R in full, none, and blended to the identity across the field (the reach of R, 0.7:
+    // the box's nodes lie 0 to ~1.5 from the wing).
+    for (rot, reach) in [(true, None), (false, None), (true, Some(0.7))] {
         let opts = tight(DeformOptions {
             adapt_rotation: rot,
+            rotation_reach: reach,
             ..Default::default()
         });
         let bc = BoundaryConditions {
@@ -155,7 +158,7 @@ fn forward_product_matches_central_differences_with_and_without_r() {
         let w = field(&m, &nodes, 1.0, BOX);
         let dw = direction(&m, &nodes, BOX);
         check(
-            &format!("R {rot}"),
+            &format!("R {rot}, reach {reach:?}"),
             forward_vs_differences(&d, &nodes, &w, &dw, 1e-4),
             1,
         );
@@ -307,6 +310,73 @@ proptest! {
         let scale = norm(&jv) * norm(&yb);
         prop_assert!((l - r).abs() <= 1e-10 * scale, "{} vs {} (scale {})", l, r, scale);
     }
+}
+
+/// The dot-product test with R blended to the identity (the reach of R) in several
+/// increments, for a few fixed random vectors.
+#[test]
+fn reverse_product_is_the_transpose_of_the_forward_one_with_a_reach() {
+    let m = box_grid();
+    let nodes = wing_nodes(&m);
+    let opts = DeformOptions {
+        min_quality_ratio: 1.0,
+        max_increments: 4,
+        rotation_reach: Some(0.7),
+        ..Default::default()
+    };
+    let bc = BoundaryConditions {
+        markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
+        displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
+    };
+    let d = Deformer::new(&m, &bc, &opts).unwrap();
+    let base = d.deform(&field(&m, &nodes, 2.0, BOX), None).unwrap();
+    assert!(base.report.increments > 1, "{}", base.report.increments);
+    let lin = d.linearise(&base).unwrap().with_rel_tol(1e-14);
+    for seed in [3u64, 77] {
+        let mut s = seed;
+        let mut next = move || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let dw: Vec<[f64; 3]> = (0..lin.n_inputs())
+            .map(|_| [next(), next(), next()])
+            .collect();
+        let yb: Vec<[f64; 3]> = (0..lin.n_nodes())
+            .map(|_| [next(), next(), next()])
+            .collect();
+        let jv = lin.jvp(&dw).unwrap().values;
+        let jt = lin.vjp(&yb).unwrap().values;
+        let dotp = |a: &[[f64; 3]], b: &[[f64; 3]]| -> f64 {
+            a.iter()
+                .zip(b)
+                .map(|(p, q)| p[0] * q[0] + p[1] * q[1] + p[2] * q[2])
+                .sum()
+        };
+        let (l, r) = (dotp(&jv, &yb), dotp(&dw, &jt));
+        let scale = norm(&jv) * norm(&yb);
+        assert!((l - r).abs() <= 1e-10 * scale, "{l} vs {r} (scale {scale})");
+    }
+}
+
+/// The forward product with the reach of R on curved supports against central differences
+/// (one increment).
+#[test]
+fn forward_product_matches_central_differences_on_supports_with_a_reach() {
+    let c = on_supports();
+    let opts = tight(DeformOptions {
+        rotation_reach: Some(0.6),
+        ..Default::default()
+    });
+    let d = c.deformer(&opts);
+    let w = field(&c.m, &c.nodes, 1.5, BULGED);
+    let dw = direction(&c.m, &c.nodes, BULGED);
+    check(
+        "supports, reach 0.6",
+        forward_vs_differences(&d, &c.nodes, &w, &dw, 1e-4),
+        1,
+    );
 }
 
 /// The step-size study of docs/crates/deform.md ("Linearisation"): the error of central

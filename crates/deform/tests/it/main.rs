@@ -5,5 +5,6 @@ mod identities;
 mod linearise;
 mod linearise_grids;
 mod props;
+mod reach;
 mod reuse;
 mod supports;
