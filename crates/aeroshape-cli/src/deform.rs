@@ -76,6 +76,11 @@ pub struct DeformArgs {
     /// Disable the adaptation matrices R (plain spring analogy).
     #[arg(long)]
     pub no_rotation: bool,
+    /// How far R reaches: blended to the identity with the distance d from the moving
+    /// markers (along grid edges), fully at d = L (grid units; 0: no R at all). Without it R
+    /// reaches everywhere (the paper's, the best cells near the wall).
+    #[arg(long, value_name = "L", value_parser = parse_reach, conflicts_with = "no_rotation")]
+    pub rotation_reach: Option<f64>,
     /// Relative residual at which the linear solves stop.
     #[arg(long, default_value_t = 1e-8)]
     pub tolerance: f64,
@@ -90,6 +95,14 @@ pub struct DeformArgs {
     #[cfg(feature = "mpi")]
     #[arg(long, value_name = "N", default_value_t = deform::distributed::COARSE_PARTS)]
     pub coarse_parts: usize,
+}
+
+/// A `--rotation-reach` value: a length ≥ 0.
+pub(crate) fn parse_reach(s: &str) -> Result<f64, String> {
+    s.parse::<f64>()
+        .ok()
+        .filter(|x| *x >= 0.0)
+        .ok_or_else(|| format!("{s:?} is not a length ≥ 0"))
 }
 
 fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
@@ -173,6 +186,8 @@ struct Report<'a> {
     seconds: Seconds,
     quality_before: mesh::quality::Summary,
     quality_after: mesh::quality::Summary,
+    /// The largest displacement far from the moving markers (`deform::FarField`).
+    far_field: deform::FarField,
     deform: &'a deform::DeformReport,
 }
 
@@ -211,6 +226,9 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     let mut request = request(&args);
     #[cfg(feature = "mpi")]
     if crate::deform_mpi::launched() {
+        if args.rotation_reach.is_some() {
+            bail!("--rotation-reach is not available under mpirun (the distributed deformation carries the full R)");
+        }
         return crate::deform_mpi::run(&args, request);
     }
     let Some(format) = format else {
@@ -283,6 +301,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
             },
             quality_before: r.quality_before,
             quality_after: r.quality_after,
+            far_field: r.far_field,
             deform: r,
         };
         aeroshape::fsio::write_atomic(path, |w| {
@@ -316,6 +335,15 @@ fn print_summary(r: &deform::DeformReport, output: &Path) -> std::io::Result<()>
         r.quality_before.n_nonpositive,
         r.quality_after.n_nonpositive
     );
+    let f = &r.far_field;
+    outln!(
+        "far field (≥ {:.3e} from the moving markers, {} nodes): largest displacement {:.3e}{}; moving markers {:.3e}",
+        f.distance,
+        f.nodes,
+        f.max_displacement,
+        f.node.map_or(String::new(), |v| format!(" (node {v})")),
+        f.wall_max_displacement
+    );
     outln!("wrote {}", output.display());
     Ok(())
 }
@@ -337,6 +365,7 @@ pub(crate) fn request(args: &DeformArgs) -> deform::Request {
         solver: args.solver,
         stiffness: args.stiffness,
         adapt_rotation: !args.no_rotation,
+        rotation_reach: args.rotation_reach,
         rel_tol: args.tolerance,
         allow_inverted: args.allow_inverted,
     }

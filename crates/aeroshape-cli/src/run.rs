@@ -34,6 +34,11 @@ pub struct RunArgs {
     /// Do not draw the PNG pictures.
     #[arg(long)]
     pub no_pictures: bool,
+    /// How far R reaches (the case's `deform.rotation_reach`, overridden): blended to the
+    /// identity with the distance d from the wall (along grid edges), fully at d = L (grid
+    /// units; 0: no R at all).
+    #[arg(long, value_name = "L", value_parser = super::deform::parse_reach)]
+    pub rotation_reach: Option<f64>,
 }
 
 /// The file `report.json`.
@@ -63,7 +68,10 @@ pub(crate) fn wing_surfaces(db: &GeomDb) -> Vec<SurfaceId> {
 /// Runs `aeroshape run`.
 pub fn run(a: RunArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let case = Case::load(&a.case)?;
+    let mut case = Case::load(&a.case)?;
+    if let Some(l) = a.rotation_reach {
+        case.deform.rotation_reach = Some(l);
+    }
     let mut inputs: Vec<PathBuf> = vec![a.case.clone(), case.geometry_path(&a.case)];
     inputs.extend(case.grid_path(&a.case));
     inputs.extend(a.dv.clone());
@@ -185,6 +193,15 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         r.quality_before.inverted,
         r.quality_after.inverted
     );
+    if let Some(f) = r.deform.report.as_ref().map(|d| d.far_field) {
+        outln!(
+            "far field (≥ {:.3e} from the wall, {} nodes): largest displacement {:.3e}; wall {:.3e}",
+            f.distance,
+            f.nodes,
+            f.max_displacement,
+            f.wall_max_displacement
+        );
+    }
     for w in &written {
         outln!("wrote {w}");
     }

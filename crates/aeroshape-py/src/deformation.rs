@@ -212,6 +212,7 @@ pub fn deform_mesh(
         solver: named::<SolverKind>("solver", solver)?,
         stiffness: named::<Stiffness>("stiffness", stiffness)?,
         adapt_rotation: !no_rotation,
+        rotation_reach: None,
         rel_tol: tolerance,
         allow_inverted,
     };

@@ -130,6 +130,10 @@ pub struct DeformSettings {
     pub stiffness: StiffnessChoice,
     /// Use the adaptation matrices R (Eqs. 18–26).
     pub adapt_rotation: bool,
+    /// How far R reaches from the wall (`deform::DeformOptions::rotation_reach`): `None`
+    /// (default), everywhere; `Some(L)`, blended to the identity with the distance from the
+    /// wall along grid edges, fully at L (grid units; `Some(0.0)`: no R at all).
+    pub rotation_reach: Option<f64>,
     /// Linear solver.
     pub solver: SolverChoice,
     /// Relative residual at which a solve stops.
@@ -151,6 +155,7 @@ impl Default for DeformSettings {
         Self {
             stiffness: StiffnessChoice::default(),
             adapt_rotation: d.adapt_rotation,
+            rotation_reach: d.rotation_reach,
             solver: SolverChoice::default(),
             rel_tol: d.rel_tol,
             max_iters: d.max_iters,
@@ -172,6 +177,7 @@ impl DeformSettings {
                 StiffnessChoice::WallDistance => deform::Stiffness::WallDistance,
             },
             adapt_rotation: self.adapt_rotation,
+            rotation_reach: self.rotation_reach,
             solver: match self.solver {
                 SolverChoice::PcgMultigrid => deform::SolverKind::PcgMultigrid,
                 SolverChoice::PcgJacobi => deform::SolverKind::PcgJacobi,

@@ -21,17 +21,6 @@ pub(crate) struct System {
     pub cons: Constraints,
     /// Unknown index of each entry of [`Classified::supports`] (u32::MAX: not an unknown).
     pub sup_unk: Vec<u32>,
-    /// The weight φ of R per node ([`crate::options::reach_weight`] of its distance from
-    /// the moving boundary); empty: 1 everywhere (R reaches everywhere).
-    pub reach: Vec<f64>,
-}
-
-impl System {
-    /// The weight φ of R at node `i` (1 without a reach).
-    #[inline]
-    pub fn reach_weight(&self, i: usize) -> f64 {
-        self.reach.get(i).copied().unwrap_or(1.0)
-    }
 }
 
 /// The unknowns in node order: with `opts.renumber` the grid is in breadth-first order
@@ -71,7 +60,6 @@ pub(crate) fn build_system(cls: &Classified, adj: &Adjacency) -> System {
         node_of,
         cons: Constraints { items },
         sup_unk,
-        reach: Vec::new(),
     }
 }
 

@@ -156,6 +156,41 @@ pub struct StiffnessMatrix {
     pub nodes: Vec<u32>,
 }
 
+/// The moving boundary, the nodes whose distance the reach of R and the far-field report
+/// measure from: the nodes of rigid markers, and the nodes with a prescribed displacement
+/// that are on no fixed marker and belong to a skin element (a marker element whose nodes
+/// all have one) or to no marker. So a fixed marker held by zero displacements (the far
+/// field of a study, the seam of a fixed and a sliding marker) is not part of it.
+fn moving_boundary(mesh: &Mesh, bc: &BoundaryConditions, cls: &Classified) -> Vec<bool> {
+    let n = mesh.n_nodes();
+    let (mut on_fixed, mut on_marker, mut in_skin) =
+        (vec![false; n], vec![false; n], vec![false; n]);
+    for m in &mesh.markers {
+        let fixed = bc
+            .markers
+            .iter()
+            .any(|(name, r)| *name == m.name && matches!(r, crate::MarkerRole::Fixed));
+        for v in m.elements.node_set() {
+            on_marker[v as usize] = true;
+            on_fixed[v as usize] |= fixed;
+        }
+    }
+    for e in &cls.skin {
+        for &v in e {
+            in_skin[v as usize] = true;
+        }
+    }
+    cls.roles
+        .iter()
+        .enumerate()
+        .map(|(i, r)| match r {
+            NodeRole::Rigid(_) => true,
+            NodeRole::Displaced(_) => !on_fixed[i] && (in_skin[i] || !on_marker[i]),
+            _ => false,
+        })
+        .collect()
+}
+
 /// The prescribed values given to [`Deformer`]: displacements or new positions.
 #[derive(Clone, Copy)]
 enum Prescribed<'a> {
@@ -194,9 +229,12 @@ pub struct Deformer<'s> {
     pub(crate) before: Summary,
     /// A and its preconditioner at the baseline (None when there is no unknown).
     pub(crate) op: Option<Operator>,
-    /// Every node's distance from the moving boundary along grid edges, on the baseline
-    /// grid (∞ where no moving node is reached).
+    /// Every node's distance from the moving boundary ([`moving_boundary`]) along grid
+    /// edges, on the baseline grid (∞ where no moving node is reached).
     pub(crate) wall_distance: Vec<f64>,
+    /// The weight φ of R per node ([`reach_weight`] of `wall_distance`); empty: 1
+    /// everywhere (no reach).
+    pub(crate) reach: Vec<f64>,
     setup: PhaseTimes,
     /// Seconds per step of the set-up.
     steps: Vec<StepTime>,
@@ -348,32 +386,23 @@ impl<'s> Deformer<'s> {
         let inv = perm.as_deref().map_or_else(Vec::new, order::inverse);
         let cls = classify(&m2, &bc2, opts.plane_rel_tol, sup2.as_ref())?;
         steps.mark("classify");
-        let mut sys = build_system(&cls, &adj);
+        let sys = build_system(&cls, &adj);
         steps.mark("unknowns");
         times.setup = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        // The wall distance (of the far-field report and of the reach of R) beside the
-        // baseline quality; the one of the wall-distance springs when computed already.
+        // The distance from the moving boundary (of the far-field report and of the reach
+        // of R) beside the baseline quality.
         let (wall_distance, q0) = rayon::join(
-            || match &distance {
-                Some(d) => d.clone(),
-                None => {
-                    let moving: Vec<bool> = cls
-                        .roles
-                        .iter()
-                        .map(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
-                        .collect();
-                    edge_distance(&adj, &m2.coords, &moving)
-                }
-            },
+            || edge_distance(&adj, &m2.coords, &moving_boundary(&m2, &bc2, &cls)),
             || cell_quality(&m2, &m2.coords),
         );
         let before = summary(&q0);
         steps.mark("quality");
         times.quality += t.elapsed().as_secs_f64();
-        if let Some(l) = opts.rotation_reach.filter(|l| *l != f64::INFINITY) {
-            sys.reach = wall_distance.iter().map(|&d| reach_weight(d, l)).collect();
-        }
+        let reach = match opts.rotation_reach.filter(|l| *l != f64::INFINITY) {
+            Some(l) => wall_distance.iter().map(|&d| reach_weight(d, l)).collect(),
+            None => Vec::new(),
+        };
         let op = if sys.node_of.is_empty() {
             None
         } else {
@@ -397,6 +426,7 @@ impl<'s> Deformer<'s> {
             before,
             op,
             wall_distance,
+            reach,
             setup: times,
             steps: steps.list,
         })
@@ -466,8 +496,8 @@ impl<'s> Deformer<'s> {
             let (a, b) = (x0[i], coords[i]);
             ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
         };
-        for (i, r) in self.cls.roles.iter().enumerate() {
-            if matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)) {
+        for (i, &d) in self.wall_distance.iter().enumerate() {
+            if d == 0.0 {
                 for q in 0..3 {
                     lo[q] = lo[q].min(x0[i][q]);
                     hi[q] = hi[q].max(x0[i][q]);

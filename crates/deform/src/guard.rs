@@ -51,6 +51,7 @@ pub(crate) fn run(
         opts: &d.opts,
         sup: d.sup.as_ref(),
         exact,
+        reach: &d.reach,
     };
     let (mesh, cls, sys, opts) = (ctx.mesh, ctx.cls, ctx.sys, ctx.opts);
     let before = d.before;

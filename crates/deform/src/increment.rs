@@ -35,6 +35,8 @@ pub(crate) struct Context<'a> {
     pub sup: Option<&'a Supports<'a>>,
     /// The positions the prescribed nodes must end at, when the call gave positions.
     pub exact: Option<&'a [[f64; 3]]>,
+    /// The weight φ of R per node (the reach of R; empty: 1 everywhere).
+    pub reach: &'a [f64],
 }
 
 impl<'a> Context<'a> {
@@ -154,7 +156,9 @@ impl Increment<'_> {
         // R: unit quaternions per node.
         let t = Instant::now();
         let warm_qv = self.warm.map(|w| w.qv.as_slice());
-        let rf = RField::new(mesh, cls, sys, op, &st.cur, &target, warm_qv, opts);
+        let rf = RField::new(
+            mesh, cls, sys, op, &st.cur, &target, warm_qv, opts, ctx.reach,
+        );
         out.rot_iterations = rf.iterations;
         times.rotation += t.elapsed().as_secs_f64();
 

@@ -78,7 +78,8 @@ pub struct DeformOptions {
     pub adapt_rotation: bool,
     /// How far R reaches from the moving boundary: `None` (default), everywhere R of Eq. 26
     /// (the paper's); `Some(L)`, R blended to the identity with the distance d of each node
-    /// from the moving boundary (along grid edges, on the baseline grid): its rotation angle
+    /// from the moving boundary (along grid edges, on the baseline grid; the moving markers
+    /// and the prescribed nodes that are not on fixed markers): its rotation angle
     /// θ becomes θ' with sin(θ'/2) = φ sin(θ/2), φ = 1 − 3t² + 2t³ for t = d / L ≤ 1 and
     /// φ = 0 beyond (R = I from d = L on). `Some(0.0)` gives R = I everywhere, as
     /// `adapt_rotation: false`; `Some(f64::INFINITY)` is `None`. See docs/crates/deform.md,
@@ -160,4 +161,10 @@ pub fn reach_weight(d: f64, reach: f64) -> f64 {
     } else {
         1.0 - t * t * (3.0 - 2.0 * t)
     }
+}
+
+/// The weight φ of R at node `i` for the per-node weights `reach` (empty: 1 everywhere).
+#[inline]
+pub(crate) fn weight_at(reach: &[f64], i: usize) -> f64 {
+    reach.get(i).copied().unwrap_or(1.0)
 }

@@ -45,6 +45,9 @@ pub struct Request {
     pub stiffness: Stiffness,
     /// Use the adaptation matrices R (Eqs. 18–26).
     pub adapt_rotation: bool,
+    /// How far R reaches from the moving boundary ([`DeformOptions::rotation_reach`]):
+    /// `None`, everywhere; `Some(L)`, blended to the identity at the distance L.
+    pub rotation_reach: Option<f64>,
     /// Relative residual at which the linear solves stop.
     pub rel_tol: f64,
     /// Return the grid even if cells are inverted after the incremental retries.
@@ -67,6 +70,7 @@ impl Default for Request {
             solver: SolverKind::default(),
             stiffness: Stiffness::default(),
             adapt_rotation: true,
+            rotation_reach: None,
             rel_tol: 1e-8,
             allow_inverted: false,
         }
@@ -81,6 +85,7 @@ impl Request {
             solver: self.solver,
             stiffness: self.stiffness,
             adapt_rotation: self.adapt_rotation,
+            rotation_reach: self.rotation_reach,
             rel_tol: self.rel_tol,
             max_iters: if self.solver == SolverKind::PointIteration {
                 POINT_ITERATION_MAX_ITERS

@@ -22,7 +22,7 @@ use sparse::{Constraints, V3};
 use crate::assembly::{System, rhs};
 use crate::bc::Classified;
 use crate::operator::Operator;
-use crate::options::DeformOptions;
+use crate::options::{DeformOptions, weight_at};
 use crate::rotation::rotation_from_frame;
 
 /// The rotations of one increment: per node, the unit quaternion of R_i (identity where
@@ -150,7 +150,7 @@ pub(crate) fn unknown_quaternion(v: V3) -> (V3, f64) {
 impl RField {
     /// R for the motion of the skin from `cur` to `target`, propagated by Eq. 26 with the
     /// operator `op` of the state `cur`; `warm`: the Eq. 26 solution of an earlier result
-    /// (per unknown) to start from.
+    /// (per unknown) to start from; `reach`: the weight φ of R per node (empty: 1).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         mesh: &Mesh,
@@ -161,8 +161,9 @@ impl RField {
         target: &[[f64; 3]],
         warm: Option<&[V3]>,
         opts: &DeformOptions,
+        reach: &[f64],
     ) -> Self {
-        Self::build(mesh, cls, sys, op, cur, target, opts, |bv, nu| {
+        Self::build(mesh, cls, sys, op, cur, target, opts, reach, |bv, nu| {
             // u = 0 (R = I) as the start, or the previous solution when warm.
             let mut xv = match warm {
                 Some(w) if w.len() == nu => w.to_vec(),
@@ -186,8 +187,9 @@ impl RField {
         target: &[[f64; 3]],
         solution: &[V3],
         opts: &DeformOptions,
+        reach: &[f64],
     ) -> Self {
-        Self::build(mesh, cls, sys, op, cur, target, opts, |_, nu| {
+        Self::build(mesh, cls, sys, op, cur, target, opts, reach, |_, nu| {
             let x = if solution.len() == nu {
                 solution.to_vec()
             } else {
@@ -208,6 +210,7 @@ impl RField {
         cur: &[[f64; 3]],
         target: &[[f64; 3]],
         opts: &DeformOptions,
+        reach: &[f64],
         solve: impl FnOnce(&[V3], usize) -> (Vec<V3>, usize),
     ) -> Self {
         let n = cur.len();
@@ -223,11 +226,11 @@ impl RField {
         let rots = element_quaternions(mesh, cls, op, cur, target);
         let (mut qv, mut qw, _, mut any_rot) = node_quaternions(cls, n, &rots);
         drop(rots);
-        if !sys.reach.is_empty() {
+        if !reach.is_empty() {
             // The reach of R (`DeformOptions::rotation_reach`): the skin's rotations are
             // blended first (they are the Eq. 26 boundary values), the unknowns' below.
             for i in 0..n {
-                (qv[i], qw[i]) = blend(qv[i], qw[i], sys.reach[i]);
+                (qv[i], qw[i]) = blend(qv[i], qw[i], reach[i]);
             }
             any_rot = qv.iter().any(|u| *u != [0.0; 3]);
         }
@@ -244,7 +247,7 @@ impl RField {
             iterations = it;
             for (k, &i) in sys.node_of.iter().enumerate() {
                 let (u, w) = unknown_quaternion(xv[k]);
-                let (u, w) = blend(u, w, sys.reach_weight(i as usize));
+                let (u, w) = blend(u, w, weight_at(reach, i as usize));
                 qv[i as usize] = u;
                 qw[i as usize] = w;
             }

@@ -89,6 +89,21 @@ fn three_commands(cad: &Path, grid: &Path, dir: &Path, frac: f64, require_vars: 
     let c = aeroshape::case::Case::load(&case.join("case.ron")).unwrap();
     let base = mesh::io::read_path(&case.join("grid.msh")).unwrap();
     let moved = mesh::io::read_path(&out.join("deformed.su2")).unwrap();
+    // the far-field displacement of the report against an independent maximum
+    let (_, nodes, max) = crate::reach::far_field(&base, &moved, &c.wall);
+    let ev = &rep["evaluation"];
+    assert_eq!(
+        ev["deform"]["report"]["far_field"]["nodes"]
+            .as_u64()
+            .unwrap() as usize,
+        nodes
+    );
+    testkit::assert_close!(
+        ev["far_field_max_displacement"].as_f64().unwrap(),
+        max,
+        rel = 1e-9,
+        abs = 1e-15
+    );
     for f in &c.fixed {
         for v in base.marker(f).unwrap().elements.node_set() {
             assert_eq!(

@@ -8,5 +8,6 @@ mod gradient;
 mod mesh;
 mod param;
 mod pipe;
+mod reach;
 mod section;
 mod surfgrid;

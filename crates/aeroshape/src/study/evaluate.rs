@@ -58,7 +58,13 @@ impl Study {
         };
         surface.write_params(&mut grid);
         let wall_support_rel = self.wall_support(&geometry, &surface, &grid);
+        let far_field_max_displacement = volume
+            .phase
+            .report
+            .as_ref()
+            .map_or(0.0, |r| r.far_field.max_displacement);
         let report = Report {
+            far_field_max_displacement,
             design: reg
                 .names()
                 .iter()

@@ -243,6 +243,10 @@ pub struct Report {
     /// Largest distance of a wall node from its support entity on the updated model
     /// (re-evaluated at its parameters), relative to the reference length.
     pub wall_support_rel: f64,
+    /// Largest displacement of a far-field node: at least the wall's bounding-box diagonal
+    /// from the wall along grid edges ([`deform::FarField`], in `deform.report.far_field`
+    /// with its distance and node); 0 when the deformation was skipped.
+    pub far_field_max_displacement: f64,
 }
 
 /// Timings and sizes of [`Study::new`](super::Study::new).

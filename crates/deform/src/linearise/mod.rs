@@ -84,12 +84,23 @@ impl<'s> Deformer<'s> {
             opts: &self.opts,
             sup: self.sup.as_ref(),
             exact: st.exact.as_deref(),
+            reach: &self.reach,
         };
         let x0 = &self.mesh.coords;
         let inc = result.report.increments.max(1);
         let mut steps = Vec::with_capacity(inc);
         let rf = |op: &Operator, c: &[[f64; 3]], t: &[[f64; 3]], sol: &[V3]| {
-            RField::from_solution(&self.mesh, &self.cls, &self.sys, op, c, t, sol, &self.opts)
+            RField::from_solution(
+                &self.mesh,
+                &self.cls,
+                &self.sys,
+                op,
+                c,
+                t,
+                sol,
+                &self.opts,
+                &self.reach,
+            )
         };
         if inc == 1 {
             let step = Increment {

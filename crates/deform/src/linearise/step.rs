@@ -29,6 +29,7 @@ use crate::bc::NodeRole;
 use crate::deformer::Deformer;
 use crate::error::{Error, Result};
 use crate::operator::Operator;
+use crate::options::weight_at;
 use crate::rfield::{RField, element_quaternions, skin_points};
 use crate::sliding::constraints;
 use crate::support::SupKind;
@@ -339,7 +340,7 @@ impl Step {
                         dq[i][t] = (a[t] - qh[t] * p) / l;
                     }
                     // The reach: the blended boundary values of Eq. 26.
-                    let phi = sys.reach_weight(i);
+                    let phi = weight_at(&d.reach, i);
                     if phi != 1.0 {
                         dq[i] = blend_d(self.q[i], [dq[i][0], dq[i][1], dq[i][2]], phi);
                     }
@@ -386,7 +387,7 @@ impl Step {
             iterations += rep.iterations;
             for (k, &i) in sys.node_of.iter().enumerate() {
                 let i = i as usize;
-                dq[i] = blend_d(self.q[i], du[k], sys.reach_weight(i));
+                dq[i] = blend_d(self.q[i], du[k], weight_at(&d.reach, i));
             }
         }
         // Eq. 21 linearised: the right-hand side.
@@ -524,7 +525,7 @@ impl Step {
                     .iter()
                     .map(|&i| {
                         let i = i as usize;
-                        blend_d_t(self.q[i], qbar[i], sys.reach_weight(i))
+                        blend_d_t(self.q[i], qbar[i], weight_at(&d.reach, i))
                     })
                     .collect();
                 let mut z = vec![[0.0; 3]; nu];
@@ -564,7 +565,7 @@ impl Step {
                 for i in 0..n {
                     let l = self.node_len[i];
                     if l > 0.0 {
-                        let phi = sys.reach_weight(i);
+                        let phi = weight_at(&d.reach, i);
                         if phi != 1.0 {
                             let v = blend_d_t(self.q[i], qbar[i], phi);
                             qbar[i] = [v[0], v[1], v[2], 0.0];
