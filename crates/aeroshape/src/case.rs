@@ -132,7 +132,16 @@ pub struct DeformSettings {
     pub adapt_rotation: bool,
     /// How far R reaches from the wall (`deform::DeformOptions::rotation_reach`): `None`
     /// (default), everywhere; `Some(L)`, blended to the identity with the distance from the
-    /// wall along grid edges, fully at L (grid units; `Some(0.0)`: no R at all).
+    /// wall along grid edges, fully at L (grid units; `Some(0.0)`: no R at all). A case
+    /// without it loads with `None`:
+    ///
+    /// ```
+    /// use aeroshape::case::Case;
+    /// let old = Case::from_ron_str("(format_version: 1, geometry: \"g.ron\", deform: (adapt_rotation: true))", "c.ron").unwrap();
+    /// assert_eq!(old.deform.options().rotation_reach, None);
+    /// let new = Case::from_ron_str("(format_version: 1, geometry: \"g.ron\", deform: (rotation_reach: Some(2.5)))", "c.ron").unwrap();
+    /// assert_eq!(new.deform.options().rotation_reach, Some(2.5));
+    /// ```
     pub rotation_reach: Option<f64>,
     /// Linear solver.
     pub solver: SolverChoice,

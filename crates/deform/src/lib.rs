@@ -15,6 +15,22 @@
 //! the exact constrained minimum of the spring energy (Eq. 18) — no outer iteration is needed
 //! for planes.
 //!
+//! How far R reaches (issue 20): R of Eq. 26 makes the near field turn with the body, which
+//! keeps the cells at the wall intact but moves nodes far from the wall more than the wall
+//! itself. [`DeformOptions::rotation_reach`] blends R to the identity with the distance from
+//! the moving boundary (`None`, the default, keeps the full R: it gave the best near-wall
+//! quality on the Gmsh-made wing grids), and [`DeformReport::far_field`] reports the largest
+//! displacement far from the wall. Measured by `cargo run --release -p deform --example
+//! rotation_reach`, the body pitched 5° (D: the moving nodes' bounding-box diagonal; the
+//! picture is `docs/figures/rotation-reach.png`, the figures `docs/crates/deform.md`, "How
+//! far R reaches"):
+//!
+//! | grid | far field (≥ D) max / wall max: no R, full R, reach D/2 | near-wall q min: before, no R, full R, reach D/2 |
+//! |---|---|---|
+//! | OCC split wing | 0.70, 4.79, 0.98 | 0.25870, 0.24919, 0.25868, 0.25779 |
+//! | OCC wing-body | 0.64, 2.36, 0.87 | 0.37488, 0.36946, 0.37487, 0.37485 |
+//! | ONERA M6 | 0.71, 4.25, 1.00 | 0.24519, 0.24310, 0.24515, 0.24406 |
+//!
 //! One idea per module:
 //! - [`options`]: [`DeformOptions`], [`SolverKind`]; [`stiffness`]: [`Stiffness`] and the
 //!   springs K_ij (Eqs. 14–19); `wall_distance`: the distance to the moving boundary.
