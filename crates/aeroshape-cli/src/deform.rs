@@ -227,7 +227,9 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     #[cfg(feature = "mpi")]
     if crate::deform_mpi::launched() {
         if args.rotation_reach.is_some() {
-            bail!("--rotation-reach is not available under mpirun (the distributed deformation carries the full R)");
+            bail!(
+                "--rotation-reach is not available under mpirun (the distributed deformation carries the full R)"
+            );
         }
         return crate::deform_mpi::run(&args, request);
     }
