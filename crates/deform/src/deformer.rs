@@ -311,7 +311,7 @@ impl<'s> Deformer<'s> {
         progress: &mut dyn FnMut(&str, usize, usize),
     ) -> Result<Self> {
         if let Some(l) = opts.rotation_reach
-            && !(l >= 0.0)
+            && (l.is_nan() || l < 0.0)
         {
             return Err(Error::BadOption {
                 reason: format!("the reach of R must be a length ≥ 0 (or infinite), not {l}"),
