@@ -562,7 +562,12 @@ fn check_options(comm: &Comm, opts: &DeformOptions) -> Result<()> {
     } else if opts.solver == SolverKind::PointIteration {
         Some("the point iteration (jacobi) is not distributed; use pcg or pcg-jacobi".into())
     } else {
-        None
+        // The blend needs the grid-wide edge distance from the moving boundary.
+        opts.rotation_reach.filter(|r| r.is_finite()).map(|reach| {
+            format!(
+                "rotation reach {reach} needs the grid-wide distance from the moving boundary; leave it unset (full R) or use --no-rotation"
+            )
+        })
     };
     match reason {
         Some(reason) => Err(Error::Distributed {
