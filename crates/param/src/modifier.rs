@@ -149,6 +149,13 @@ pub enum LineSupport {
     /// A support curve; the modifier moves the control nodes of its `links`, each at line
     /// parameter = the foot of the normal on the curve and distance = the distance to it.
     Curve(CurveId),
+    /// A straight line in space (x₀, b), not an entity of the model; the modifier moves the
+    /// control nodes of its `links`, each at line parameter = its coordinate along the line
+    /// (r − x₀) · b (b normalised) and distance = its distance from the line. With a
+    /// `range` ending at the farthest linked node and a fixed `direction` this is a
+    /// displacement field along an axis, e.g. a fuselage nose bent down or stretched
+    /// forward from a section (Figs. 10 and 12).
+    Axis(Axis),
 }
 
 /// Line level (§5.2, Eq. 36): q(s) = Σ Δq_i H_i(s) along a line, added along the surface
@@ -160,11 +167,11 @@ pub struct LineModifier {
     pub name: String,
     /// The line.
     pub line: LineSupport,
-    /// Moved entities (curve lines only; an iso line moves its own surface's nodes).
+    /// Moved entities (curve and axis lines; an iso line moves its own surface's nodes).
     #[serde(default)]
     pub links: Links,
     /// Range [a, b] of the line's global parameter mapped onto s ∈ [0, 1] (default: the
-    /// whole line).
+    /// whole line; for an `Axis` line, the linked nodes' extent along it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub range: Option<[f64; 2]>,
     /// Basis family H_i.

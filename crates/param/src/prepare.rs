@@ -238,6 +238,17 @@ fn link_nodes(db: &GeomDb, m: &str, links: &Links) -> Result<Vec<usize>> {
     Ok(out.into_iter().collect())
 }
 
+/// The normals of the control nodes of the linked surfaces (first surface first).
+fn link_normals(db: &GeomDb, links: &Links) -> BTreeMap<usize, Option<Vector3>> {
+    let mut normals = BTreeMap::new();
+    for &s in &links.surfaces {
+        for sn in surface_nodes(db, s) {
+            normals.entry(sn.id).or_insert(sn.normal);
+        }
+    }
+    normals
+}
+
 fn unit(m: &str, what: &str, v: Vector3) -> Result<Vector3> {
     let l = v.norm();
     if l > 0.0 && l.is_finite() {
@@ -638,17 +649,37 @@ fn bind_line(db: &GeomDb, m: &LineModifier, vars: &[usize]) -> Result<Bound> {
                 pts.push((sn.id, sp, (sn.uv[k] - iso.at).abs(), sn.normal));
             }
         }
+        LineSupport::Axis(axis) => {
+            let b = unit(name, "line axis direction", axis.direction)?;
+            if !axis.point.coords.iter().all(|c| c.is_finite()) {
+                return Err(bad(name, "line axis point is not finite"));
+            }
+            let nodes = link_nodes(db, name, &m.links)?;
+            let normals = link_normals(db, &m.links);
+            // (node, coordinate along the axis, distance from it)
+            let along: Vec<(usize, f64, f64)> = nodes
+                .iter()
+                .map(|&n| {
+                    let v = db.control_nodes[n] - axis.point;
+                    let t = v.dot(&b);
+                    (n, t, (v - b * t).norm())
+                })
+                .collect();
+            let extent = along.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |r, a| {
+                [r[0].min(a.1), r[1].max(a.1)]
+            });
+            let r = param_range(m.range, extent, name, "range")?;
+            for (n, t, d) in along {
+                let sp = (t - r[0]) / (r[1] - r[0]);
+                pts.push((n, sp, d, normals.get(&n).copied().flatten()));
+            }
+        }
         LineSupport::Curve(cid) => {
             if cid.index() >= db.curves.len() {
                 return Err(missing(name, cid.to_string(), db.curves.len()));
             }
             let nodes = link_nodes(db, name, &m.links)?;
-            let mut normals: BTreeMap<usize, Option<Vector3>> = BTreeMap::new();
-            for &s in &m.links.surfaces {
-                for sn in surface_nodes(db, s) {
-                    normals.entry(sn.id).or_insert(sn.normal);
-                }
-            }
+            let normals = link_normals(db, &m.links);
             let curve = db.curve(*cid);
             let opts = ProjectOptions::default().with_length_scale(db.reference_length());
             let proj = CurveProjector::new(cid.to_string(), curve, &opts)?;

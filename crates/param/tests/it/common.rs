@@ -35,7 +35,7 @@ pub fn vars(prefix: &str, n: usize) -> Vec<DesignVariable> {
         .collect()
 }
 
-/// One modifier of every kind (and both surface forms, both line supports) on the
+/// One modifier of every kind (and both surface forms, the three line supports) on the
 /// wing-body fixture.
 pub fn wing_body_all() -> (GeomDb, Parametrisation) {
     let db = fixture("wing_body");
@@ -171,6 +171,25 @@ pub fn wing_body_all() -> (GeomDb, Parametrisation) {
                 var("m_sweep", -1.0, 1.0),
                 var("m_dihedral", -1.0, 1.0),
             ],
+        }),
+        // a displacement field along an axis (Figs. 10 and 12): the fuselage ahead of
+        // x = 2 bent down and stretched forward, growing towards the nose
+        Modifier::Line(LineModifier {
+            name: "nose".into(),
+            line: LineSupport::Axis(Axis {
+                point: Point3::new(2.0, 0.0, 0.0),
+                direction: Vector3::new(-2.0, 0.0, 0.0),
+            }),
+            links: Links {
+                surfaces: vec![SurfaceId(0)],
+                ..Links::default()
+            },
+            range: Some([0.0, 2.0]),
+            basis: Basis::Bernstein { degree: 2 },
+            active: Some(vec![1, 2]),
+            direction: Direction::Axis(Vector3::new(0.0, 0.0, -1.0)),
+            decay: Decay::Cosine { width: 3.0 },
+            variables: vars("nd", 2),
         }),
     ];
     let _ = ControlNodeId(0);

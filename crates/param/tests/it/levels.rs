@@ -448,3 +448,79 @@ fn normal_direction_is_the_surface_normal() {
         }
     }
 }
+
+/// A line modifier along an axis (Eq. 36 with s the coordinate along a straight line): on
+/// the wing-body fuselage, a linear ramp from x = 2 to the nose along −x stretches the nose
+/// (x ↦ x − δ (2 − x) / 2, an affine map: the tip moves by δ), a quadratic one along −z bends
+/// it down by δ (2 − x)² / 4; every node behind x = 2, and every node of the wing, keeps its
+/// bits. Read from RON as a user writes it.
+#[test]
+fn axis_line_stretches_and_bends_the_nose_and_leaves_the_rest_bit_for_bit() {
+    let db = fixture("wing_body");
+    let text = r#"(modifiers: [
+        Line(name: "stretch", line: Axis(point: (2.0, 0.0, 0.0), direction: (-1.0, 0.0, 0.0)),
+             links: (surfaces: [0]), range: (0.0, 2.0), basis: Bernstein(degree: 1),
+             active: [1], direction: Axis(-1.0, 0.0, 0.0),
+             variables: [(name: "stretch", lower: -1.0, upper: 1.0)]),
+        Line(name: "droop", line: Axis(point: (2.0, 0.5, 0.5), direction: (-3.0, 0.0, 0.0)),
+             links: (surfaces: [0]), range: (0.0, 2.0), basis: Bernstein(degree: 2),
+             active: [2], direction: Axis(0.0, 0.0, -1.0),
+             variables: [(name: "droop", lower: -1.0, upper: 1.0)]),
+    ])"#;
+    let p = Parametrisation::from_ron_str(text, "p.ron").unwrap();
+    let prep = p.bind(&db, &MasterSources::new()).unwrap();
+    let fuselage: std::collections::BTreeSet<usize> = db
+        .surface(SurfaceId(0))
+        .control
+        .nodes
+        .iter()
+        .flatten()
+        .map(|i| i.index())
+        .collect();
+    let r0 = db.control_points();
+    let tip = (0..r0.len())
+        .filter(|k| fuselage.contains(k))
+        .min_by(|&a, &b| r0[a].x.total_cmp(&r0[b].x))
+        .unwrap();
+    assert_eq!(r0[tip].x, 0.0, "the nose tip");
+    for (x, which) in [([0.3, 0.0], 0), ([0.0, 0.2], 1), ([-0.25, -0.1], 2)] {
+        let out = prep.apply(&x).unwrap();
+        let mut ahead = 0;
+        for k in 0..r0.len() {
+            let p0 = r0[k];
+            if !fuselage.contains(&k) || p0.x >= 2.0 {
+                assert_eq!(bits(&[out[k]]), bits(&[p0]), "node {k} ({which}) moved");
+                continue;
+            }
+            ahead += 1;
+            let s = (2.0 - p0.x) / 2.0;
+            let want = Point3::new(p0.x - x[0] * s, p0.y, p0.z - x[1] * s * s);
+            assert_close!(
+                out[k].coords.as_slice(),
+                want.coords.as_slice(),
+                rel = 0.0,
+                abs = 1e-14
+            );
+        }
+        assert!(ahead > 50, "{ahead} nodes ahead of x = 2");
+        // the tip moves by exactly the variables
+        assert_eq!(out[tip].x, -x[0]);
+        assert_eq!(out[tip].z, r0[tip].z - x[1]);
+    }
+    // a zero axis and a line without links are errors naming the modifier
+    let mut bad = p.clone();
+    if let Modifier::Line(l) = &mut bad.modifiers[0] {
+        l.line = LineSupport::Axis(Axis {
+            point: Point3::origin(),
+            direction: Vector3::zeros(),
+        });
+    }
+    let e = bad.bind(&db, &MasterSources::new()).err().unwrap().to_string();
+    assert!(e.contains("'stretch'") && e.contains("non-zero"), "{e}");
+    let mut bad = p.clone();
+    if let Modifier::Line(l) = &mut bad.modifiers[1] {
+        l.links = Links::default();
+    }
+    let e = bad.bind(&db, &MasterSources::new()).err().unwrap().to_string();
+    assert!(e.contains("'droop'") && e.contains("links no control node"), "{e}");
+}
