@@ -134,3 +134,98 @@ fn every_design_variable_matches_central_differences() {
     }
     assert!(junction, "a variable that moves the junction is checked");
 }
+
+/// The fuselage variables `case init` builds on the default geometry and grid — the waist
+/// (surface level, Eq. 38) and the nose droop and stretch (lines along the fuselage axis,
+/// Eq. 36) — against central differences, volume and wall, at a design vector with each at
+/// 30 % of its bound; droop and stretch move the nose and leave the junction's nodes still.
+#[test]
+fn init_fuselage_variables_match_central_differences() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = case_dir("default");
+    let text = std::fs::read_to_string(src.join("wing_body.ron")).unwrap();
+    let db = geom_db::GeomDb::from_ron_str(&text, "wing_body.ron").unwrap();
+    let grid = mesh::io::read_path(&src.join("grid.msh")).unwrap();
+    let opts = aeroshape::init::InitOptions::default();
+    aeroshape::init::init_case(&db, &grid, &[], dir.path(), &opts).unwrap();
+    let path = dir.path().join("case.ron");
+    let mut c = Case::load(&path).expect("case");
+    c.deform.rel_tol = 1e-12;
+    c.deform.warm_start = false;
+    let s = Study::new(c, &path).expect("study builds");
+    let vars = s.registry().variables();
+    let fuselage: Vec<usize> = (0..vars.len())
+        .filter(|&i| vars[i].name.starts_with("fuselage."))
+        .collect();
+    let names: Vec<&str> = fuselage.iter().map(|&i| vars[i].name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["fuselage.waist", "fuselage.droop", "fuselage.stretch"]
+    );
+    let mut x = s.initial();
+    for &i in &fuselage {
+        x[i] = 0.3 * vars[i].upper;
+    }
+    let lref = s.geometry().reference_length();
+    let lin = s.linearise(&x).unwrap();
+    let db = s.geometry();
+    let on_junction = |i: usize| match s.baseline_surface().support[i] {
+        surfgrid::NodeSupport::Curve { comp, .. } => {
+            db.curve(db.curve_component(comp).curve)
+                .defining_surfaces
+                .len()
+                == 2
+        }
+        _ => false,
+    };
+    for &l in &fuselage {
+        let name = &vars[l].name;
+        let mut e = vec![0.0; x.len()];
+        e[l] = 1.0;
+        let jw = lin.jvp_wall(&e).unwrap();
+        let norm = |p: &[f64; 3]| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        let m = jw.iter().map(norm).fold(0.0, f64::max);
+        assert!(m > 0.0, "{name} moves the wall");
+        let h = 1e-4 * lref / m;
+        for wall in [false, true] {
+            let c = s.check_jvp(&x, &e, h, wall).unwrap();
+            eprintln!(
+                "{name} (h = {h:.1e}, wall {wall}): |FD| {:.4e}, |J e| {:.4e}, relative error {:.2e}",
+                c.fd_norm, c.product_norm, c.rel_error
+            );
+            assert!(c.fd_norm > 0.0, "{name} moves the grid");
+            assert!(
+                c.rel_error < 1e-6,
+                "{name}: relative error {:.3e}",
+                c.rel_error
+            );
+        }
+        let jm = (0..jw.len())
+            .filter(|&i| on_junction(i))
+            .map(|i| norm(&jw[i]))
+            .fold(0.0, f64::max);
+        eprintln!("{name}: largest junction-node derivative {jm:.3e} (wall {m:.3e})");
+        if name != "fuselage.waist" {
+            // the nose tip (the foremost wall node that moves) moves by the variable itself,
+            // down or forward (s = 1 there); the junction does not move
+            let coords = &s.baseline().coords;
+            let tip = (0..jw.len())
+                .filter(|&i| norm(&jw[i]) > 0.0)
+                .min_by(|&a, &b| coords[a][0].total_cmp(&coords[b][0]))
+                .unwrap();
+            let want = if name == "fuselage.droop" {
+                [0.0, 0.0, -1.0]
+            } else {
+                [-1.0, 0.0, 0.0]
+            };
+            let d = [jw[tip][0] - want[0], jw[tip][1] - want[1], jw[tip][2] - want[2]];
+            assert!(
+                coords[tip][0].abs() < 1e-12 && norm(&d) < 1e-9,
+                "{name}: node {tip} at {:?} moves along {:?}",
+                coords[tip],
+                jw[tip]
+            );
+            assert!(jm < 1e-9 * m, "{name} moves the junction: {jm:.3e}");
+        }
+    }
+}

@@ -10,10 +10,10 @@
 //!    whole volume grid written with parametric wall nodes (`DIR/grid.msh`), the geometry
 //!    (`DIR/geometry.ron`) and the case (`DIR/case.ron`);
 //! 4. the default design space ([`space`]): per part of the wall ([`parts`]), a wing
-//!    master for a wing wrapped round its leading edge ([`wing`]), the waist at the wing
-//!    junction for a fuselage ([`fuselage`]), normal bumps otherwise; every variable that
-//!    moves no control node left out, and the bounds checked by the study ([`bounds`]):
-//!    each variable alone at either bound leaves every cell valid.
+//!    master for a wing ([`wing`]), the waist at the wing junction ([`fuselage`]) and the
+//!    nose droop and stretch ([`nose`]) for a fuselage, normal bumps otherwise; every
+//!    variable that moves no control node left out, and the bounds checked by the study
+//!    ([`bounds`]): each variable alone at either bound leaves every cell valid.
 //!
 //! A geometry without control nodes (§3) cannot be moved by any design variable: that is
 //! an error ([`InitError::NoControlNodes`]) unless [`InitOptions::assign_control_nodes`]
@@ -32,6 +32,7 @@ use crate::study::{Study, StudyError};
 pub mod bounds;
 pub mod cad;
 pub mod fuselage;
+pub mod nose;
 pub mod parts;
 pub mod roles;
 pub mod space;
@@ -303,7 +304,8 @@ pub fn init_case(
     let text = format!(
         "// Made by `aeroshape case init` (see docs/guide.md): markers by shape, wall tied to\n\
          // the geometry; per part of the wall a wing master (wing), the waist at the wing\n\
-         // junction (fuselage) or normal bumps (other parts), bounds checked by the study.\n{}\n",
+         // junction, nose droop and stretch (fuselage) or normal bumps (other parts), bounds\n\
+         // checked by the study.\n{}\n",
         case.to_ron_string()
     );
     write_atomic(&case_path, |w| w.write_all(text.as_bytes()))?;

@@ -6,7 +6,8 @@
 //!   `wing.twist.tip`, `wing.chord.tip`, `wing.tmax.root`, `wing.tmax.tip`,
 //!   `wing.camber.tip`);
 //! * a **fuselage** gets the waist at the wing junction of Fig. 9 ([`super::fuselage`]:
-//!   `fuselage.waist`);
+//!   `fuselage.waist`), the nose droop of Fig. 10 and the stretch of Fig. 12 ahead of the
+//!   junction ([`super::nose`]: `fuselage.droop`, `fuselage.stretch`);
 //! * any other part, and a wing or fuselage for which the above cannot be built (the reason
 //!   is noted), gets one smooth bump along the normal per support surface (surface level,
 //!   Eq. 38, the middle Bernstein function of degree 2 in u and in v: zero on the border of
@@ -24,7 +25,7 @@ use param::{
 use wingmaster::WingMasterSpec;
 
 use super::parts::{Kind, parts, shared_curves};
-use super::{fuselage, wing};
+use super::{fuselage, nose, wing};
 
 /// A design space: the parametrisation, the wing masters its master modifiers use, what was
 /// built and what was left out.
@@ -124,14 +125,43 @@ pub fn default_space(db: &GeomDb, walls: &[usize], bump_bound: f64) -> Space {
             }
             Kind::Fuselage => {
                 let junction = shared_curves(db, &part.comps, &wing_comps);
+                let mut whys = Vec::new();
+                let mut built = false;
                 match fuselage::waist(db, &part.role, &part.comps, &junction) {
                     Ok((m, summary)) => {
                         seen.extend(m.surfaces.iter().copied());
                         space.built.push(summary);
                         mods.push(Modifier::Surface(m));
-                        None
+                        built = true;
                     }
-                    Err(why) => Some(why),
+                    Err(why) => whys.push(why),
+                }
+                let nose = nose::nose(
+                    db,
+                    &part.role,
+                    &part.comps,
+                    &part.caps,
+                    &junction,
+                    &wing_comps,
+                );
+                match nose {
+                    Ok((m, summary)) => {
+                        for l in &m {
+                            if let Modifier::Line(l) = l {
+                                seen.extend(l.links.surfaces.iter().copied());
+                            }
+                        }
+                        space.built.push(summary);
+                        mods.extend(m);
+                        built = true;
+                    }
+                    Err(why) => whys.push(why),
+                }
+                if built {
+                    space.notes.extend(whys);
+                    None
+                } else {
+                    Some(whys.join("; "))
                 }
             }
             Kind::Other => {
