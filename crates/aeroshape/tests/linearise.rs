@@ -218,7 +218,11 @@ fn init_fuselage_variables_match_central_differences() {
             } else {
                 [-1.0, 0.0, 0.0]
             };
-            let d = [jw[tip][0] - want[0], jw[tip][1] - want[1], jw[tip][2] - want[2]];
+            let d = [
+                jw[tip][0] - want[0],
+                jw[tip][1] - want[1],
+                jw[tip][2] - want[2],
+            ];
             assert!(
                 coords[tip][0].abs() < 1e-12 && norm(&d) < 1e-9,
                 "{name}: node {tip} at {:?} moves along {:?}",

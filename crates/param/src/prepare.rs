@@ -665,9 +665,11 @@ fn bind_line(db: &GeomDb, m: &LineModifier, vars: &[usize]) -> Result<Bound> {
                     (n, t, (v - b * t).norm())
                 })
                 .collect();
-            let extent = along.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |r, a| {
-                [r[0].min(a.1), r[1].max(a.1)]
-            });
+            let extent = along
+                .iter()
+                .fold([f64::INFINITY, f64::NEG_INFINITY], |r, a| {
+                    [r[0].min(a.1), r[1].max(a.1)]
+                });
             let r = param_range(m.range, extent, name, "range")?;
             for (n, t, d) in along {
                 let sp = (t - r[0]) / (r[1] - r[0]);

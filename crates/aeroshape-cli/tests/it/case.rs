@@ -11,21 +11,21 @@ use std::process::{Command, Output};
 use geom_db::GeomDb;
 use geom_db::prelude::Point3;
 
-fn bin() -> Command {
+pub(crate) fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_aeroshape"))
 }
 
-fn root() -> PathBuf {
+pub(crate) fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-fn ok(o: &Output) -> String {
+pub(crate) fn ok(o: &Output) -> String {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
 /// The default case's grid as SU2, markers renamed, no entity tags or parameters.
-fn renamed_su2(dir: &Path) -> PathBuf {
+pub(crate) fn renamed_su2(dir: &Path) -> PathBuf {
     let mut g = mesh::io::read_path(&root().join("fixtures/cases/default/grid.msh")).unwrap();
     for (i, m) in g.markers.iter_mut().enumerate() {
         m.name = format!("zone_{i}");
@@ -163,10 +163,12 @@ fn init_list_and_run_on_a_renamed_su2_grid() {
         init.contains("far field: its box holds every other marker"),
         "{init}"
     );
-    // the paper's variables: the wing master (planform, twist, thickness, camber) and the
-    // fuselage waist at the wing junction (Fig. 9)
+    // the paper's variables: the wing master (planform, twist, thickness, camber), the
+    // fuselage waist at the wing junction (Fig. 9), nose droop (Fig. 10) and stretch (Fig. 12)
     for want in [
         "fuselage.waist",
+        "fuselage.droop",
+        "fuselage.stretch",
         "wing.sweep",
         "wing.twist.tip",
         "wing.chord.tip",

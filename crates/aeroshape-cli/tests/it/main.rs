@@ -3,6 +3,7 @@
 
 mod case;
 mod deform;
+mod fuselage;
 mod geom;
 mod gradient;
 mod mesh;

@@ -131,7 +131,11 @@ pub fn nose(
             .max_by(|&a, &b| (whi[a] - wlo[a]).total_cmp(&(whi[b] - wlo[b])))
     }
     .expect("two axes across");
-    let up = across.iter().copied().find(|&j| j != span).expect("a vertical axis");
+    let up = across
+        .iter()
+        .copied()
+        .find(|&j| j != span)
+        .expect("a vertical axis");
     let mut down = Vector3::zeros();
     down[up] = -1.0;
     let links = Links {

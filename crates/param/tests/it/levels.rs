@@ -515,12 +515,23 @@ fn axis_line_stretches_and_bends_the_nose_and_leaves_the_rest_bit_for_bit() {
             direction: Vector3::zeros(),
         });
     }
-    let e = bad.bind(&db, &MasterSources::new()).err().unwrap().to_string();
+    let e = bad
+        .bind(&db, &MasterSources::new())
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("'stretch'") && e.contains("non-zero"), "{e}");
     let mut bad = p.clone();
     if let Modifier::Line(l) = &mut bad.modifiers[1] {
         l.links = Links::default();
     }
-    let e = bad.bind(&db, &MasterSources::new()).err().unwrap().to_string();
-    assert!(e.contains("'droop'") && e.contains("links no control node"), "{e}");
+    let e = bad
+        .bind(&db, &MasterSources::new())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("'droop'") && e.contains("links no control node"),
+        "{e}"
+    );
 }
