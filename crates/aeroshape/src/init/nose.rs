@@ -106,7 +106,7 @@ pub fn nose(
         .iter()
         .filter(|&&n| (db.control_nodes[n] - point).dot(&along) > 0.0)
         .count();
-    if !(length > MIN_PART * ext[k]) || ahead < 2 {
+    if length.partial_cmp(&(MIN_PART * ext[k])) != Some(std::cmp::Ordering::Greater) || ahead < 2 {
         return Err(format!(
             "{role}: no nose droop or stretch: the first patch reaching the junction starts \
              at {} = {start:.4}, {:.4} behind the nose",
