@@ -1,19 +1,19 @@
-//! `aeroshape geom import`: an IGES file into a geometric database (RON), with an optional
-//! JSON report of the conversion and sewing.
+//! `aeroshape geom import`: an IGES or STEP file into a geometric database (RON), with an
+//! optional JSON report of the conversion and sewing.
 
-use std::io::BufReader;
 use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use geom_db::import::{ImportOptions, import};
+use geom_db::import::{ImportOptions, LengthUnit, import_bytes};
 
 use aeroshape::fsio::{ensure_not_input, write_atomic};
 
 /// Arguments of `aeroshape geom import`.
 #[derive(Debug, Args)]
 pub struct ImportArgs {
-    /// The IGES file (fixed 80-column ASCII form, IGES 5.3).
+    /// The CAD file: IGES 5.3 (fixed 80-column ASCII form) or STEP (ISO 10303-21: AP203,
+    /// AP214, AP242), told apart by the content.
     pub iges: PathBuf,
     /// The geometric database to write (.ron).
     #[arg(short = 'o', long = "output", value_name = "GEOM.ron")]
@@ -30,6 +30,16 @@ pub struct ImportArgs {
     /// normals into the volume enclosed by the largest shell and away from the others).
     #[arg(long)]
     pub flip: bool,
+    /// Convert lengths to this unit (m, mm or in) [default: the file's unit].
+    #[arg(long, value_name = "UNIT", value_parser = parse_unit)]
+    pub units: Option<LengthUnit>,
+    /// Roles given by hand (RON map face entity → role, e.g. `{"D31": "wing", "#17":
+    /// "fuselage"}`), overriding the recognition by shape.
+    #[arg(long, value_name = "FILE.ron")]
+    pub roles: Option<PathBuf>,
+    /// Do not assign control nodes (Eq. 9) at the end of the import.
+    #[arg(long)]
+    pub no_control_nodes: bool,
     /// Write a JSON report: per-entity conversion error, faces, shells, sewn, free and
     /// non-manifold edges.
     #[arg(long, value_name = "REPORT.json")]
@@ -57,15 +67,25 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
         }
     }
     let shown = a.iges.display().to_string();
-    let file = std::fs::File::open(&a.iges).with_context(|| format!("cannot open {shown}"))?;
-    let iges = iges::read(BufReader::new(file), &shown)?;
+    let bytes = std::fs::read(&a.iges).with_context(|| format!("cannot read {shown}"))?;
+    let roles = match &a.roles {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            ron::from_str(&text).map_err(|e| anyhow::anyhow!("{}:{e}", path.display()))?
+        }
+        None => Default::default(),
+    };
     let opts = ImportOptions {
+        roles,
+        control_nodes: !a.no_control_nodes,
         tolerance: a.tolerance,
         sew_tolerance: a.sew_tolerance,
         flip: a.flip,
+        units: a.units.clone(),
         ..ImportOptions::default()
     };
-    let (db, report) = import(&iges, &opts)?;
+    let (db, report) = import_bytes(&bytes, &shown, &opts)?;
     write_atomic(&a.output, |w| db.write_ron(w))?;
     if let Some(r) = &a.report {
         write_atomic(r, |w| {
@@ -74,14 +94,15 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
         })?;
     }
     outln!(
-        "{}: {} surface components, {} curve components ({} shared, {} free, {} non-manifold), {} corners",
+        "{}: {} surface components, {} curve components ({} shared, {} free, {} non-manifold), {} corners, {} control nodes",
         a.output.display(),
         db.surface_components.len(),
         db.curve_components.len(),
         report.sewn_edges,
         report.free_edges.len(),
         report.non_manifold_edges.len(),
-        db.corners.len()
+        db.corners.len(),
+        db.control_nodes.len()
     );
     outln!(
         "  conversion: {} entities, max error {:.3e} (tolerance {:.3e}); max sewing gap {:.3e} (tolerance {:.3e})",
@@ -105,8 +126,16 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
     }
     let roles: Vec<String> = roles.iter().map(|(r, n)| format!("{n} {r}")).collect();
     outln!("  faces: {}", roles.join(", "));
+    outln!(
+        "  junctions: {} curves with two defining surfaces (re-intersected on model updates)",
+        report.junctions.len()
+    );
     for w in &report.warnings {
         outln!("  warning: {w}");
     }
     Ok(())
+}
+
+fn parse_unit(s: &str) -> Result<LengthUnit, String> {
+    LengthUnit::named(s).ok_or_else(|| format!("unknown unit {s:?} (m, mm or in)"))
 }

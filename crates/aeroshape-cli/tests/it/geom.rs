@@ -164,7 +164,7 @@ fn import_m6_then_check() {
         .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(
-        stdout(&o).contains("faces: 2 farfield, 1 symmetry, 4 wing"),
+        stdout(&o).contains("faces: 2 farfield, 1 symmetry, 2 wing, 2 wing_tip"),
         "{}",
         stdout(&o)
     );

@@ -1,6 +1,7 @@
 //! The `aeroshape` program end to end, one module per subcommand family (one integration
 //! binary for the crate, to keep link time down).
 
+mod cad_param;
 mod case;
 mod deform;
 mod fuselage;

@@ -15,8 +15,9 @@
 //!   database — each documented in its file.
 //! * Units: the file's length unit is honoured and reported; [`ImportOptions::units`]
 //!   converts to another.
-//! * Roles ([`recognise`]): symmetry plane, far field, wing or body, naming each surface
-//!   component `<role>.<entity>` (e.g. `wing.D31`, `body.#17`).
+//! * Roles ([`recognise`], by shape): symmetry plane, far field, wing, wing tip, fuselage,
+//!   fuselage caps or body, naming each surface component `<role>.<entity>` (e.g.
+//!   `wing.D31`, `fuselage.#17`); [`ImportOptions::roles`] overrides them.
 //! * The way back ([`to_iges`]): support surfaces as 114 or 128, surface components as 144
 //!   trimmed surfaces with 142 boundaries over 112/126 model curves.
 
@@ -122,6 +123,14 @@ pub struct ImportOptions {
     /// Convert lengths to this unit (`None`: keep the file's). A file that declares no
     /// unit cannot be converted.
     pub units: Option<LengthUnit>,
+    /// Roles given by hand, overriding the recognition by shape ([`recognise`]): face
+    /// entity (`D31`, `#17`, as in [`FaceReport::entity`]) → role name (`wing`,
+    /// `fuselage`, `farfield`, …). The surface component is named `<role>.<entity>`; the
+    /// role `farfield` makes its shell enclose the fluid.
+    pub roles: std::collections::BTreeMap<String, String>,
+    /// Assign control nodes (Eq. 9, [`GeomDb::assign_control_nodes`]) at the end of the
+    /// import, so that the model can be parametrised at once; default true.
+    pub control_nodes: bool,
 }
 
 impl Default for ImportOptions {
@@ -133,6 +142,8 @@ impl Default for ImportOptions {
             rel_sew_tolerance: 1e-6,
             flip: false,
             units: None,
+            roles: Default::default(),
+            control_nodes: true,
         }
     }
 }
@@ -242,6 +253,7 @@ pub fn import_model(
         free_edges: Vec::new(),
         non_manifold_edges: Vec::new(),
         orientation_conflicts: 0,
+        junctions: Vec::new(),
         warnings: model.warnings.clone(),
     };
     stage::run(&model, opts, report)

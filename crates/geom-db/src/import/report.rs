@@ -108,6 +108,9 @@ pub struct ImportReport {
     pub non_manifold_edges: Vec<EdgeReport>,
     /// Shared edges whose two faces could not be oriented consistently.
     pub orientation_conflicts: usize,
+    /// Curve components recorded as junctions: the intersection of the two support
+    /// surfaces of their faces (defining surfaces, re-intersected by the model update).
+    pub junctions: Vec<usize>,
     /// Entities skipped or not fully understood, each named.
     pub warnings: Vec<String>,
 }

@@ -172,24 +172,25 @@ fn cube_faces_are_sewn_and_oriented_inward() {
     assert_eq!(rep.orientation_conflicts, 0);
     assert_eq!(rep.shells.len(), 1);
     assert!(rep.shells[0].closed);
-    // One shell: normals point into the enclosed volume, which is the unit cube.
-    testkit::assert_close!(rep.shells[0].volume, -1.0, rel = 1e-9);
+    // One shell, a body: the inward normal (towards the region to mesh) points away from the
+    // unit cube, whose volume is then positive.
+    testkit::assert_close!(rep.shells[0].volume, 1.0, rel = 1e-9);
     let check = db.check(&Default::default());
     assert!(
         check.topology.closed && check.is_ok(),
         "{:?}",
         check.problems
     );
-    // The inward normal at each face centre points to the cube centre.
+    // The inward normal at each face centre points away from the cube centre.
     for sc in &db.surface_components {
         let s = db.surface(sc.surface);
         let n = s.normal(0.5, 0.5).unwrap() * sc.inward.sign();
         let to_centre = Point3::new(0.5, 0.5, 0.5) - s.point(0.5, 0.5);
-        assert!(n.dot(&to_centre) > 0.49, "{}", sc.name);
+        assert!(n.dot(&to_centre) < -0.49, "{}", sc.name);
     }
     // --flip reverses all of them.
     let (db2, rep2) = import(&cube(), &ImportOptions::default().with_flip(true)).unwrap();
-    testkit::assert_close!(rep2.shells[0].volume, 1.0, rel = 1e-9);
+    testkit::assert_close!(rep2.shells[0].volume, -1.0, rel = 1e-9);
     for (a, b) in db.surface_components.iter().zip(&db2.surface_components) {
         assert_eq!(a.inward.sign(), -b.inward.sign());
     }
@@ -249,12 +250,14 @@ fn m6_is_imported_sewn_and_closed() {
         }
     }
     // Roles: the far field is exactly the faces on the spheres (surfaces of revolution,
-    // type 120), the symmetry plane the face with the root hole (in y = 0), the wing the rest.
+    // type 120), the symmetry plane the face with the root hole (in y = 0), the two small
+    // rounded tip faces the wing tip, the wing the rest.
     for (f, c) in rep.faces.iter().zip(&db.surface_components) {
         let on_sphere = db.surface(c.surface).name.ends_with("(120)");
         let expected = match (on_sphere, f.loops) {
             (true, _) => "farfield",
             (false, 2) => "symmetry",
+            _ if f.area < 0.05 => "wing_tip",
             _ => "wing",
         };
         assert_eq!(f.role, expected, "{f:?}");
@@ -464,7 +467,7 @@ fn bounded_and_brep_cubes_are_sewn() {
         assert_eq!(db.corners.len(), 8);
         assert_eq!(rep.sewn_edges, 12);
         assert!(rep.shells[0].closed);
-        testkit::assert_close!(rep.shells[0].volume, -1.0, rel = 1e-9);
+        testkit::assert_close!(rep.shells[0].volume, 1.0, rel = 1e-9);
         assert!(rep.entities.iter().all(|e| e.method == "exact"));
         assert!(db.check(&Default::default()).is_ok());
     }
@@ -571,7 +574,7 @@ fn cube_exports_as_114_and_112() {
     let (db2, rep, _) = export_import(&db);
     assert_eq!(rep.sewn_edges, 12);
     assert!(surface_distance(&db, &db2) <= 1e-14);
-    testkit::assert_close!(rep.shells[0].volume, -1.0, rel = 1e-9);
+    testkit::assert_close!(rep.shells[0].volume, 1.0, rel = 1e-9);
 }
 
 /// Gmsh (OpenCASCADE) reads the exported M6 back: 7 trimmed faces, the same bounding box.
@@ -745,7 +748,7 @@ fn t_junction_is_split_and_sewn() {
     assert_eq!(db.curve_components.len(), 13);
     assert_eq!(rep.sewn_edges, 13, "{:?}", rep.free_edges);
     assert!(rep.shells[0].closed);
-    testkit::assert_close!(rep.shells[0].volume, -1.0, rel = 1e-9);
+    testkit::assert_close!(rep.shells[0].volume, 1.0, rel = 1e-9);
     assert!(db.check(&Default::default()).is_ok());
 }
 

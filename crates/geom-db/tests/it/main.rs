@@ -1,8 +1,10 @@
 //! Integration tests of the public API of `geom-db`.
 
 mod analytic;
+mod cad_import;
 mod control;
 mod convert;
+mod corrupt;
 mod fixtures;
 mod ron_fuzz;
 mod validate;

@@ -9,6 +9,12 @@
 //! seam of a cylinder gets one connected box. A face without loops is its surface's
 //! natural domain. Non-periodic directions are clipped to the natural domain.
 //!
+//! Margins: a planar support covers its face's box grown by a quarter of its extent on
+//! each side, so that curves on it (a wing tip, the symmetry plane's section of the
+//! fuselage) can move outward and still be re-intersected with it (Eq. 12); a B-spline
+//! support keeps every knot span the face overlaps (a lofted wing keeps its span from the
+//! root section inside the fuselage); periodic directions keep their seam uncut.
+//!
 //! Conversion is exact for planes (one bilinear patch over the box), 114 splines and
 //! non-rational B-splines (every knot span, keeping the spans that overlap the box), and an
 //! interpolation at the control nodes within the tolerance otherwise (module `approx`).
@@ -303,6 +309,16 @@ pub(crate) fn run(model: &CadModel, opts: &ImportOptions) -> Result<Faces, Error
         let (raw, b) = trim_box(model, fi, &d)?;
         geoms.push((d, b, raw));
     }
+    // Planar supports keep a margin beyond their face, so that a curve on them can move
+    // outward when the model changes (Eq. 12 re-intersects it on the support, not the face).
+    let margins: Vec<Option<Rect>> = geoms
+        .iter()
+        .enumerate()
+        .map(|(fi, (_, b, _))| {
+            let s = &model.surfaces[model.faces[fi].surface].surface;
+            matches!(s, Surface::Plane { .. }).then(|| with_margin(*b))
+        })
+        .collect();
     // The model size.
     let (mut lo, mut hi) = (
         Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
@@ -345,8 +361,9 @@ pub(crate) fn run(model: &CadModel, opts: &ImportOptions) -> Result<Faces, Error
     let mut conversions = Vec::new();
     let mut key_of: HashMap<(usize, [u64; 4]), usize> = HashMap::new();
     let mut faces = Vec::with_capacity(n);
-    for (fi, (d, b, raw)) in geoms.into_iter().enumerate() {
+    for (fi, (d, trim, raw)) in geoms.into_iter().enumerate() {
         let si = model.faces[fi].surface;
+        let (b, raw) = margins[fi].map_or((trim, raw), |m| (m, m));
         let key = (
             si,
             [
@@ -368,7 +385,7 @@ pub(crate) fn run(model: &CadModel, opts: &ImportOptions) -> Result<Faces, Error
         };
         faces.push(FaceGeom {
             domain: d,
-            trim: b,
+            trim,
             support: k,
         });
     }
@@ -380,6 +397,15 @@ pub(crate) fn run(model: &CadModel, opts: &ImportOptions) -> Result<Faces, Error
         sew,
         conversions,
     })
+}
+
+/// Fraction of a planar face's box added on each side of its support.
+const PLANE_MARGIN: f64 = 0.25;
+
+/// `b` grown by [`PLANE_MARGIN`] of its extent on each side.
+fn with_margin(((u0, u1), (v0, v1)): Rect) -> Rect {
+    let (du, dv) = (PLANE_MARGIN * (u1 - u0), PLANE_MARGIN * (v1 - v0));
+    ((u0 - du, u1 + du), (v0 - dv, v1 + dv))
 }
 
 /// The largest distance between the support and the exact surface, sampled at 5 × 5

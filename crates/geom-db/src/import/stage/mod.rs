@@ -55,17 +55,9 @@ pub(crate) fn run(
     junctions::run(&mut edges, &mut loops, &mut corners, faces.sew);
     let sewn = sewing::run(&edges, &loops, &corners, faces.sew);
     let mut oriented = orientation::run(model, &faces, &edges, &sewn);
-    let shells = shells::run(
-        model,
-        &faces,
-        &edges,
-        &corners,
-        &sewn,
-        &mut oriented,
-        opts.flip,
-    );
+    let shells = shells::run(model, &faces, &edges, &corners, &sewn, &mut oriented);
     database::run(
-        model, &faces, &edges, &corners, &sewn, &oriented, &shells, report,
+        model, &faces, &edges, &corners, &sewn, &oriented, &shells, opts, report,
     )
 }
 

@@ -1,9 +1,11 @@
 //! Stage 8, shells: each connected set of faces, its enclosed volume V = ⅓ ∮ x·n dA (with
 //! Green's theorem in each face's parameter plane), whether it is closed, and the global
-//! choice of normals: the largest shell (by bounding-box diagonal) is flipped to V < 0
-//! (normals into the fluid it encloses, e.g. a far field) and the others to V > 0 (bodies:
-//! normals away from them); [`ImportOptions::flip`](super::super::ImportOptions::flip)
-//! reverses all.
+//! choice of normals: every shell is turned to V > 0, i.e. the inward normal (towards the
+//! region to be meshed) points away from the volume the shell encloses, as for a body
+//! (OpenCASCADE's outward normals of a solid). A shell that encloses the fluid (a far
+//! field, recognised by [`roles`](super::super::roles)) is turned round by the database
+//! stage, and so is every shell with
+//! [`ImportOptions::flip`](super::super::ImportOptions::flip).
 
 use super::super::model::CadModel;
 use super::corners::Corners;
@@ -34,7 +36,6 @@ pub(crate) fn run(
     corners: &Corners,
     sewn: &Sewn,
     oriented: &mut Oriented,
-    flip_all: bool,
 ) -> Shells {
     let n = oriented.n_shells;
     let mut volumes = vec![0.0; n];
@@ -63,16 +64,9 @@ pub(crate) fn run(
             if d.is_finite() { d } else { 0.0 }
         })
         .collect();
-    let largest = (0..n)
-        .max_by(|&a, &b| sizes[a].total_cmp(&sizes[b]).then(b.cmp(&a)))
-        .unwrap_or(0);
     let mut shell_flip = vec![false; n];
     for sh in 0..n {
-        let want_negative = sh == largest;
-        shell_flip[sh] = (volumes[sh] > 0.0) == want_negative;
-        if flip_all {
-            shell_flip[sh] = !shell_flip[sh];
-        }
+        shell_flip[sh] = volumes[sh] < 0.0;
         if shell_flip[sh] {
             volumes[sh] = -volumes[sh];
         }
