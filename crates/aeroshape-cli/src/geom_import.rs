@@ -126,9 +126,23 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
     }
     let roles: Vec<String> = roles.iter().map(|(r, n)| format!("{n} {r}")).collect();
     outln!("  faces: {}", roles.join(", "));
+    let rebuilt: Vec<f64> = report
+        .junctions
+        .iter()
+        .filter_map(|j| j.max_distance)
+        .collect();
+    let rebuilt = if rebuilt.is_empty() {
+        String::new()
+    } else {
+        format!(
+            ", {} rebuilt on their supports (max distance {:.3e})",
+            rebuilt.len(),
+            rebuilt.iter().copied().fold(0.0, f64::max)
+        )
+    };
     outln!(
-        "  junctions: {} curves with two defining surfaces (re-intersected on model updates)",
-        report.junctions.len()
+        "  junctions: {} curves with two defining surfaces (re-intersected on model updates){rebuilt}",
+        report.junctions.len(),
     );
     for w in &report.warnings {
         outln!("  warning: {w}");

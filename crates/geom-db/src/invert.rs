@@ -50,8 +50,9 @@ pub struct InvertOptions {
     /// Samples per patch (arc) and direction of the brute-force start search of
     /// [`SurfaceInverter::project`] / [`CurveInverter::project`] (default 8).
     pub samples_per_patch: usize,
-    /// Newton starts of the brute-force search (default 4): the nearest samples, no two
-    /// neighbours in the sample grid.
+    /// Newton starts of the brute-force search (default 4): the sample grid's local minima
+    /// of the distance, nearest first, then the nearest samples, no two neighbours in the
+    /// sample grid.
     pub max_starts: usize,
 }
 
@@ -297,8 +298,14 @@ fn check_domain(label: &str, lo: f64, hi: f64, what: &str) -> Result<()> {
     Ok(())
 }
 
-/// Starts for the brute-force search: the `k` nearest samples of a lattice, skipping any
-/// sample next to (in the lattice) a start already taken. `dims`: lattice sizes.
+/// Starts for the brute-force search (`dims`: lattice sizes, `k`: how many).
+///
+/// First the lattice's local minima of the sampled distance (a sample no farther than any of
+/// its lattice neighbours), nearest first: one start in every valley of the distance, so a
+/// point near a thin part (a trailing edge, where the upper and lower sides are millimetres
+/// apart but far apart in the parameters) starts on both sides, not only on the side whose
+/// samples happen to be a little nearer. Then, while fewer than `k`, the nearest samples not
+/// next to (in the lattice) a start already taken.
 fn lattice_starts<const D: usize>(d2: &[f64], dims: [usize; D], k: usize) -> Vec<usize> {
     let coords = |mut i: usize| {
         let mut c = [0usize; D];
@@ -308,19 +315,64 @@ fn lattice_starts<const D: usize>(d2: &[f64], dims: [usize; D], k: usize) -> Vec
         }
         c
     };
+    let index = |c: &[usize; D]| {
+        let mut i = 0;
+        for a in (0..D).rev() {
+            i = i * dims[a] + c[a];
+        }
+        i
+    };
+    // the 3^D - 1 lattice neighbours of sample i
+    let neighbours = |i: usize| {
+        let c = coords(i);
+        let mut out = Vec::with_capacity(3usize.pow(D as u32));
+        for m in 0..3usize.pow(D as u32) {
+            let mut q = c;
+            let mut mm = m;
+            let mut inside = true;
+            let mut same = true;
+            for a in 0..D {
+                let o = mm % 3;
+                mm /= 3;
+                same &= o == 1;
+                match (c[a] + o).checked_sub(1) {
+                    Some(x) if x < dims[a] => q[a] = x,
+                    _ => inside = false,
+                }
+            }
+            if inside && !same {
+                out.push(index(&q));
+            }
+        }
+        out
+    };
+    let mut minima: Vec<usize> = (0..d2.len())
+        .filter(|&i| d2[i].is_finite() && neighbours(i).iter().all(|&j| !(d2[j] < d2[i])))
+        .collect();
+    minima.sort_by(|&a, &b| d2[a].total_cmp(&d2[b]).then(a.cmp(&b)));
     let mut out: Vec<usize> = Vec::with_capacity(k);
+    let near = |out: &[usize], i: usize| {
+        let ci = coords(i);
+        out.iter().any(|&j| {
+            let cj = coords(j);
+            (0..D).all(|a| ci[a].abs_diff(cj[a]) <= 1)
+        })
+    };
+    for m in minima {
+        if out.len() == k {
+            break;
+        }
+        if !near(&out, m) {
+            out.push(m);
+        }
+    }
     while out.len() < k {
         let mut best: Option<usize> = None;
         for (i, &d) in d2.iter().enumerate() {
             if !d.is_finite() || best.is_some_and(|b| d2[b] <= d) {
                 continue;
             }
-            let ci = coords(i);
-            let near = out.iter().any(|&j| {
-                let cj = coords(j);
-                (0..D).all(|a| ci[a].abs_diff(cj[a]) <= 1)
-            });
-            if !near {
+            if !near(&out, i) {
                 best = Some(i);
             }
         }

@@ -183,7 +183,7 @@ fn imported_wing_body_takes_twist_sweep_thickness_and_waist() {
         for (name, value) in dvs {
             let dv = dir.path().join("dv.ron");
             std::fs::write(&dv, format!("{{\"{name}\": {value:e}}}")).unwrap();
-            let out = dir.path().join("out.ron");
+            let out = dir.path().join(format!("out_{name}_{value:.4}.ron"));
             let o = bin()
                 .args(["param", "apply"])
                 .arg(&case)

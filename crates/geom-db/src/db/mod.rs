@@ -93,6 +93,13 @@ pub struct GeomDb {
     /// Length unit, informative ("m", "mm").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub units: Option<String>,
+    /// The model's size as declared by whoever made it (the CAD import: the bounding-box
+    /// diagonal of the trimmed faces), the [`reference_length`](Self::reference_length)
+    /// when present. Support surfaces may reach well past their faces (a symmetry plane's
+    /// margin, the cut-away half of a periodic fuselage), so the bounding box of the
+    /// supports is not the model's size.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<f64>,
     /// Corners, indexed by [`CornerId`].
     #[serde(default)]
     pub corners: Vec<Corner>,
@@ -122,6 +129,7 @@ impl GeomDb {
             format_version: FORMAT_VERSION,
             name: name.into(),
             units: None,
+            size: None,
             corners: Vec::new(),
             curves: Vec::new(),
             surfaces: Vec::new(),
@@ -195,11 +203,16 @@ impl GeomDb {
         any.then_some((lo, hi))
     }
 
-    /// The reference length: the bounding-box diagonal (1 for an empty or point-like model).
+    /// The reference length: the declared [`size`](Self::size) when present (an imported
+    /// model), else the bounding-box diagonal (1 for an empty or point-like model).
     ///
-    /// Computed on each call from [`bbox`](Self::bbox) (every arc and patch evaluated on its
-    /// control-node grid, O(model size)): call it once per operation, not per point.
+    /// Without a declared size it is computed on each call from [`bbox`](Self::bbox) (every
+    /// arc and patch evaluated on its control-node grid, O(model size)): call it once per
+    /// operation, not per point.
     pub fn reference_length(&self) -> f64 {
+        if let Some(l) = self.size.filter(|l| l.is_finite() && *l > 0.0) {
+            return l;
+        }
         match self.bbox() {
             Some((lo, hi)) => {
                 let d = (hi - lo).norm();

@@ -73,6 +73,14 @@ impl GeomDb {
         ]
         .iter()
         .any(|&n| n > u32::MAX as usize);
+        if let Some(l) = self.size
+            && !(l.is_finite() && l > 0.0)
+        {
+            return Err(invalid(
+                Entity::Model,
+                format!("size {l} is not a positive finite length"),
+            ));
+        }
         if too_many {
             return Err(invalid(
                 Entity::Model,

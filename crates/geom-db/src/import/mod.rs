@@ -37,7 +37,9 @@ mod tests;
 
 pub use export::to_iges;
 pub use model::{CadModel, LengthUnit};
-pub use report::{EdgeReport, EntityConversion, FaceReport, ImportReport, ShellReport};
+pub use report::{
+    EdgeReport, EntityConversion, FaceReport, ImportReport, JunctionReport, ShellReport,
+};
 pub use roles::{FaceRole, recognise};
 
 use crate::db::GeomDb;

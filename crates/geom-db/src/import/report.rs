@@ -69,6 +69,26 @@ pub struct EdgeReport {
     pub faces: Vec<String>,
 }
 
+/// A junction: a curve shared by two components that is the intersection of their
+/// support surfaces (its two defining surfaces), rebuilt on those supports.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct JunctionReport {
+    /// The curve component and its support curve (the same index in an import).
+    pub component: usize,
+    /// Its two defining support surfaces.
+    pub surfaces: [usize; 2],
+    /// The parameter its arcs follow (`u` or `v` of the first or second surface: `u1`, `v1`,
+    /// `u2`, `v2`); `None` when the curve was kept as read (see the warnings).
+    pub driver: Option<&'static str>,
+    /// Number of arcs.
+    pub arcs: usize,
+    /// Largest distance to either support at the fit's check points between the nodes of
+    /// every arc (`None` when kept as read).
+    pub max_distance: Option<f64>,
+    /// Largest move of its end corners onto the supports' intersection.
+    pub corner_move: f64,
+}
+
 /// What the import did.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ImportReport {
@@ -108,9 +128,9 @@ pub struct ImportReport {
     pub non_manifold_edges: Vec<EdgeReport>,
     /// Shared edges whose two faces could not be oriented consistently.
     pub orientation_conflicts: usize,
-    /// Curve components recorded as junctions: the intersection of the two support
-    /// surfaces of their faces (defining surfaces, re-intersected by the model update).
-    pub junctions: Vec<usize>,
+    /// Curves recorded as junctions: the intersection of the two support surfaces of the
+    /// faces that share them, re-intersected by the model update (Eq. 12).
+    pub junctions: Vec<JunctionReport>,
     /// Entities skipped or not fully understood, each named.
     pub warnings: Vec<String>,
 }

@@ -7,7 +7,9 @@
 
 use super::super::model::CadModel;
 use super::super::roles;
-use super::super::{EdgeReport, Error, FaceReport, ImportOptions, ImportReport, ShellReport};
+use super::super::{
+    EdgeReport, Error, FaceReport, ImportOptions, ImportReport, JunctionReport, ShellReport,
+};
 use super::corners::Corners;
 use super::edges::Edges;
 use super::faces::Faces;
@@ -38,6 +40,7 @@ pub(crate) fn run(
 ) -> Result<(GeomDb, ImportReport), Error> {
     let mut db = GeomDb::empty(model.name.clone());
     db.units = rep.units.clone();
+    db.size = Some(faces.size);
     db.corners = corners
         .points
         .iter()
@@ -76,7 +79,7 @@ pub(crate) fn run(
             surface
         })
         .collect();
-    seams_on_borders(&mut db, faces, sewn);
+    curves_on_borders(&mut db, faces, sewn);
     db.surface_components = model
         .faces
         .iter()
@@ -157,7 +160,8 @@ pub(crate) fn run(
             }
         }
     }
-    record_junctions(&mut db, faces, sewn, &names, &mut rep);
+    let junctions = record_junctions(&mut db, faces, sewn, &names);
+    rebuild_junctions(&mut db, &junctions, faces, &mut rep);
     for (fi, c) in db.surface_components.iter().enumerate() {
         let f = &model.faces[fi];
         rep.faces.push(FaceReport {
@@ -189,7 +193,6 @@ pub(crate) fn run(
             oriented.conflicts
         ));
     }
-    let _ = CornerId::from_index;
     db.validate().map_err(|e| Error::Invalid {
         file: model.file.clone(),
         source: Box::new(e),
@@ -225,14 +228,9 @@ const MIN_JUNCTION_SINE: f64 = 0.1;
 /// plane), is their intersection. Its two defining surfaces let the model update re-intersect it
 /// (Eq. 12) and the corners on it (Eq. 13); tangent pairs (smooth joins) are left to their
 /// shared control nodes.
-fn record_junctions(
-    db: &mut GeomDb,
-    faces: &Faces,
-    sewn: &Sewn,
-    names: &[String],
-    rep: &mut ImportReport,
-) {
+fn record_junctions(db: &mut GeomDb, faces: &Faces, sewn: &Sewn, names: &[String]) -> Vec<usize> {
     let opts = InvertOptions::for_model(db);
+    let mut out = Vec::new();
     for (k, s) in sewn.edges.iter().enumerate() {
         let [a, b] = s.uses.as_slice() else { continue };
         let (fa, fb) = (a.face, b.face);
@@ -271,25 +269,125 @@ fn record_junctions(
         if crossing {
             db.curves[k].defining_surfaces =
                 vec![SurfaceId::from_index(sa), SurfaceId::from_index(sb)];
-            rep.junctions.push(k);
+            out.push(k);
+        }
+    }
+    out
+}
+
+/// Rebuilds every junction as the intersection of its two supports
+/// ([`intersections`](super::intersections)), moves its end corners onto it and re-finds
+/// the ends of the other curve components at those corners; a junction that cannot be
+/// rebuilt (or whose ends would move by more than the sewing tolerance) is kept as read,
+/// with a warning.
+fn rebuild_junctions(db: &mut GeomDb, junctions: &[usize], faces: &Faces, rep: &mut ImportReport) {
+    const DRIVERS: [&str; 4] = ["u1", "v1", "u2", "v2"];
+    let mut moved: Vec<usize> = Vec::new();
+    for &k in junctions {
+        let [sa, sb] = [
+            db.curves[k].defining_surfaces[0].index(),
+            db.curves[k].defining_surfaces[1].index(),
+        ];
+        let comp = &db.curve_components[k];
+        let (c0, c1) = (comp.start.index(), comp.end.index());
+        let mut jr = JunctionReport {
+            component: k,
+            surfaces: [sa, sb],
+            driver: None,
+            arcs: db.curves[k].arcs.len(),
+            max_distance: None,
+            corner_move: 0.0,
+        };
+        let fitted = super::intersections::fit(
+            &db.surfaces[sa],
+            &db.surfaces[sb],
+            &db.curves[k].arcs,
+            faces.size,
+        )
+        .and_then(|f| {
+            let n = f.arcs.len();
+            let (p0, p1) = (f.arcs[0].point(0.0), f.arcs[n - 1].point(1.0));
+            let m0 = (p0 - db.corners[c0].point).norm();
+            let m1 = (p1 - db.corners[c1].point).norm();
+            let gap = if c0 == c1 { (p1 - p0).norm() } else { 0.0 };
+            if m0.max(m1) > faces.sew || gap > 1e-9 * faces.size {
+                return Err(format!(
+                    "its ends would move by {:.3e} (sewing tolerance {:.3e}) and be {gap:.3e} apart",
+                    m0.max(m1),
+                    faces.sew
+                ));
+            }
+            Ok((f, p0, p1, m0.max(m1)))
+        });
+        match fitted {
+            Ok((f, p0, p1, m)) => {
+                jr.driver = Some(DRIVERS[f.driver]);
+                jr.arcs = f.arcs.len();
+                jr.max_distance = Some(f.max_distance);
+                jr.corner_move = m;
+                db.curves[k].arcs = f.arcs;
+                db.curve_components[k].t0 = 0.0;
+                db.curve_components[k].t1 = jr.arcs as f64;
+                db.corners[c0].point = p0;
+                db.corners[c1].point = p1;
+                moved.extend([c0, c1]);
+            }
+            Err(e) => rep.warnings.push(format!(
+                "junction {} ({}) is kept as read, not rebuilt on its supports: {e}",
+                k, db.curves[k].name
+            )),
+        }
+        rep.junctions.push(jr);
+    }
+    // the other components that end at a moved corner: their end parameter is the corner's
+    // foot on their curve, continued from the old one
+    for k in 0..db.curve_components.len() {
+        if junctions.contains(&k) {
+            continue;
+        }
+        let cc = db.curve_components[k].clone();
+        let curve = &db.curves[cc.curve.index()];
+        let (lo, hi) = crate::eval::ParamCurve::domain(curve);
+        let settings = InvertOptions::new(faces.size).settings();
+        let foot = |c: CornerId, t: f64| {
+            let p = db.corners[c.index()].point;
+            crate::invert::foot_on_curve(curve, &p, t, lo, hi, settings).x[0]
+        };
+        let (t0, t1) = (
+            if moved.contains(&cc.start.index()) {
+                foot(cc.start, cc.t0)
+            } else {
+                cc.t0
+            },
+            if moved.contains(&cc.end.index()) {
+                foot(cc.end, cc.t1)
+            } else {
+                cc.t1
+            },
+        );
+        if (t1 - t0).abs() > 1e-9 {
+            db.curve_components[k].t0 = t0;
+            db.curve_components[k].t1 = t1;
         }
     }
 }
 
-/// Seams: an edge used twice by one face (the seam of a closed surface) that runs along a
-/// border of the face's support surface becomes the part of that whole border (the
-/// patches' border arcs, uncut): its control nodes are then the surface's own, so the seam
-/// follows every change of the surface, and it reaches past the face (into the fuselage at
-/// a wing root) for the corners on it to be re-intersected (Eq. 13).
-fn seams_on_borders(db: &mut GeomDb, faces: &Faces, sewn: &Sewn) {
+/// Curves on support borders: an edge that runs along a border of the support surface of a
+/// face using it (the seam of a closed surface, used twice by one face; a half fuselage's
+/// edge on the symmetry plane; a wing's edge at its tip cap) becomes the part of that whole
+/// border (the patches' border arcs, uncut). Its control nodes are then the surface's own,
+/// so the curve follows every change of the surface (a fuselage waist moves its edges on the
+/// symmetry plane with it), and a seam reaches past the face (into the fuselage at a wing
+/// root) for the corners on it to be re-intersected (Eq. 13).
+fn curves_on_borders(db: &mut GeomDb, faces: &Faces, sewn: &Sewn) {
     for (k, s) in sewn.edges.iter().enumerate() {
-        let [a, b] = s.uses.as_slice() else { continue };
-        if a.face != b.face {
-            continue;
-        }
-        let sup = &db.surfaces[faces.faces[a.face].support];
+        let mut supports: Vec<usize> = s.uses.iter().map(|u| faces.faces[u.face].support).collect();
+        supports.dedup();
         let curve = &db.curves[k];
-        let Some(border) = border_of(sup, &curve.arcs, faces.sew) else {
+        let Some(border) = supports
+            .iter()
+            .find_map(|&i| border_of(&db.surfaces[i], &curve.arcs, faces.sew))
+        else {
             continue;
         };
         let samples = super::curve_samples(&border, 16);

@@ -80,7 +80,8 @@ pub(crate) struct Faces {
     /// The support surfaces.
     pub supports: Vec<Support>,
     /// Model size: the bounding-box diagonal of the faces' surfaces, sampled over their
-    /// natural domain when bounded, else over the trimming box.
+    /// trimming boxes (not the whole surface: a periodic fuselage cut in half, a plane's
+    /// margin are not the model).
     pub size: f64,
     /// Approximation tolerance.
     pub tol: f64,
@@ -94,6 +95,8 @@ pub(crate) struct Faces {
 const EDGE_SAMPLES: usize = 24;
 /// Samples per parameter-space curve piece.
 const UV_SAMPLES: usize = 32;
+/// Samples per direction of each face's trimming box for the model size.
+const SIZE_SAMPLES: usize = 16;
 
 fn face_err(model: &CadModel, face: usize, reason: impl Into<String>) -> Error {
     let s = &model.faces[face].source;
@@ -324,15 +327,16 @@ pub(crate) fn run(model: &CadModel, opts: &ImportOptions) -> Result<Faces, Error
         Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
         Point3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY),
     );
-    for (fi, (d, b, _)) in geoms.iter().enumerate() {
+    for (fi, (_, b, _)) in geoms.iter().enumerate() {
         let s = &model.surfaces[model.faces[fi].surface].surface;
-        let ((u0, u1), (v0, v1)) = if d.is_bounded() { (d.u, d.v) } else { *b };
-        for i in 0..=8 {
-            for j in 0..=8 {
-                let p = s.point(
-                    u0 + (u1 - u0) * i as f64 / 8.0,
-                    v0 + (v1 - v0) * j as f64 / 8.0,
+        let ((u0, u1), (v0, v1)) = *b;
+        for i in 0..=SIZE_SAMPLES {
+            for j in 0..=SIZE_SAMPLES {
+                let (fu, fv) = (
+                    i as f64 / SIZE_SAMPLES as f64,
+                    j as f64 / SIZE_SAMPLES as f64,
                 );
+                let p = s.point(u0 + (u1 - u0) * fu, v0 + (v1 - v0) * fv);
                 if p.coords.iter().all(|c| c.is_finite()) {
                     lo = lo.inf(&p);
                     hi = hi.sup(&p);

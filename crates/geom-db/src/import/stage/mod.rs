@@ -10,7 +10,9 @@
 //! 6. `sewing`: coincident pieces merged into sewn edges, each with its uses.
 //! 7. `orientation`: inward signs, consistent across shared edges.
 //! 8. `shells`: connected shells, volumes, the global sign.
-//! 9. `database`: the validated [`GeomDb`] and the report.
+//! 9. `database`: the validated [`GeomDb`] and the report; within it, roles, seams on
+//!    support borders, junctions and
+//! 10. `intersections`: each junction rebuilt as the intersection of its two supports.
 //!
 //! Each stage's result is a plain struct the next one reads; a stage the next engineer
 //! adds (roles by shape, untrimmed margins, seams, control nodes, junctions) goes between
@@ -20,6 +22,7 @@ pub(crate) mod corners;
 pub(crate) mod database;
 pub(crate) mod edges;
 pub(crate) mod faces;
+pub(crate) mod intersections;
 pub(crate) mod junctions;
 pub(crate) mod loops;
 pub(crate) mod orientation;
