@@ -496,16 +496,43 @@ impl<'a, S: ParamSurface + ?Sized> SurfaceInverter<'a, S> {
         let starts = lattice_starts(&d2, [us.len(), vs.len()], self.opts.max_starts);
         let mut conv: Option<SurfaceFoot> = None;
         let mut any: Option<SurfaceFoot> = None;
-        for &s in &starts {
-            let f = self.foot_from(p, [us[s % us.len()], vs[s / us.len()]]);
-            if f.report.converged && conv.is_none_or(|b| f.distance < b.distance) {
-                conv = Some(f);
+        // A foot held on the domain's boundary is tried again from half a patch inward:
+        // Newton can stop on a bound at a constrained minimum (the rounded trailing edge of a
+        // periodic wing, seen from a point on its upper side 4 cm from the edge, stopped
+        // 3.6e-2 away at the edge) that a start inside the domain avoids; a foot that truly
+        // lies on the boundary is found again.
+        let inward = |f: &SurfaceFoot| {
+            let mut uv = f.uv;
+            for (a, x) in uv.iter_mut().enumerate() {
+                let e = &self.edges[a];
+                let n = e.len();
+                if *x <= self.lo[a] && n > 1 {
+                    *x = 0.5 * (e[0] + e[1]);
+                } else if *x >= self.hi[a] && n > 1 {
+                    *x = 0.5 * (e[n - 2] + e[n - 1]);
+                }
             }
-            if any.is_none_or(|b| f.distance < b.distance) {
-                any = Some(f);
+            uv
+        };
+        let mut n = 0;
+        for &s in &starts {
+            let mut uv = Some([us[s % us.len()], vs[s / us.len()]]);
+            let mut retried = false;
+            while let Some(start) = uv.take() {
+                n += 1;
+                let f = self.foot_from(p, start);
+                if f.report.converged && conv.is_none_or(|b| f.distance < b.distance) {
+                    conv = Some(f);
+                }
+                if any.is_none_or(|b| f.distance < b.distance) {
+                    any = Some(f);
+                }
+                if f.on_boundary && !retried && start != inward(&f) {
+                    retried = true;
+                    uv = Some(inward(&f));
+                }
             }
         }
-        let n = starts.len();
         let set = |f: SurfaceFoot| SurfaceFoot { starts: n, ..f };
         let any = any.ok_or_else(|| Error::InversionInput {
             entity: self.label.clone(),

@@ -282,7 +282,8 @@ pub struct Station {
     /// Twist deviation (radians, right-handed about the master's axis).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub twist: Option<String>,
-    /// Relative scale deviation σ (the section is scaled by 1 + σ about the reference line).
+    /// Relative scale deviation σ (the section is scaled by 1 + σ about the reference line,
+    /// normal to the axis).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scale: Option<String>,
     /// Translation deviations x, y, z (length units).
@@ -295,8 +296,10 @@ pub struct Station {
 /// surface's global parameters); design variables set, at key stations t_k, a twist θ, a
 /// scale σ and a shift d, linearly interpolated in t between stations (held constant
 /// outside) — the paper's rule of interpolating deviations, not shapes (§6.2). A master
-/// point at t moves to ref(t) + (1 + σ) Rot_b(θ) (M₀ − ref(t)) + d, ref(t) the reference
-/// line from `reference[0]` (t = 0) to `reference[1]` (t = 1).
+/// point at t moves to ref(t) + P_b R + (1 + σ) (R − P_b R) + d with R = Rot_b(θ) (M₀ −
+/// ref(t)), P_b R = b (b · R) its component along the axis: the section is scaled in its
+/// plane, not along the span. ref(t) is the reference line from `reference[0]` (t = 0) to
+/// `reference[1]` (t = 1).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StationsMaster {
@@ -456,6 +459,11 @@ impl StationsSource {
         let refp = r[0].coords + (r[1] - r[0]) * t;
         let m0 = self.base.points[k].coords;
         let (rv, drv) = rotate(m0 - refp, self.axis, q[0]);
+        // the scale acts in the section's plane (normal to the axis): a section scaled at
+        // one station does not move along the span, so a planar cap at the tip stays
+        // planar wherever its nodes fall on the master (∂/∂θ is normal to the axis too)
+        let along = self.axis * self.axis.dot(&rv);
+        let across = rv - along;
         let shift = Vector3::new(q[2], q[3], q[4]);
         if let Some(d) = ders {
             d.clear();
@@ -466,7 +474,7 @@ impl StationsSource {
                     d[v] += drv * ((1.0 + q[1]) * ws);
                 }
                 if let Some(v) = sl[1] {
-                    d[v] += rv * ws;
+                    d[v] += across * ws;
                 }
                 for c in 0..3 {
                     if let Some(v) = sl[2 + c] {
@@ -475,7 +483,7 @@ impl StationsSource {
                 }
             }
         }
-        Point3::from(refp + rv * (1.0 + q[1]) + shift)
+        Point3::from(refp + along + across * (1.0 + q[1]) + shift)
     }
 }
 

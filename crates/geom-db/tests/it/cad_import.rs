@@ -161,3 +161,40 @@ fn a_far_field_role_turns_the_shell_to_enclose_the_fluid() {
     testkit::assert_close!(rep2.shells[0].volume, -rep.shells[0].volume, rel = 1e-12);
     assert!(rep.shells[0].volume > 0.0);
 }
+
+#[test]
+fn unsupported_entities_are_skipped_with_a_warning_naming_them() {
+    // IGES: OpenCASCADE's faces-mode files hold a 402 (associativity) entity.
+    let (db, rep) = import_cad("split_wing_faces_m.igs");
+    assert_eq!(db.surface_components.len(), 4);
+    assert!(
+        rep.warnings
+            .iter()
+            .any(|w| w.contains("D line 1 (type 402, form 1)") && w.contains("skipped")),
+        "{:?}",
+        rep.warnings
+    );
+    // STEP: an entity of an unknown type and an unsupported surface (trimmed by a known
+    // one) that no shell holds: the surface is named.
+    let name = "split_wing_ap214_m.stp";
+    let text = std::fs::read_to_string(cad_dir().join(name)).unwrap();
+    let data = text.find("DATA;").unwrap();
+    let end = data + text[data..].find("ENDSEC;").unwrap();
+    let extra = "#90001=FOO_BAR_ENTITY('x',1.0,#11);\n\
+                 #90002=CURVE_BOUNDED_SURFACE('',#11,(),.F.);\n\
+                 #90003=RECTANGULAR_TRIMMED_SURFACE('',#90002,0.,1.,0.,1.,.T.,.T.);\n";
+    let text = format!("{}{extra}{}", &text[..end], &text[end..]);
+    let opts = ImportOptions::default().with_units(LengthUnit::named("m").unwrap());
+    let (db2, rep2) = import_bytes(text.as_bytes(), name, &opts).unwrap();
+    assert_eq!(db2.surface_components.len(), db.surface_components.len());
+    let named: Vec<&String> = rep2
+        .warnings
+        .iter()
+        .filter(|w| w.contains("skipped") && w.contains("#9000"))
+        .collect();
+    assert_eq!(named.len(), 1, "{:?}", rep2.warnings);
+    assert!(
+        named[0].starts_with("#90002 (line ") && named[0].contains("CURVE_BOUNDED_SURFACE"),
+        "{named:?}"
+    );
+}

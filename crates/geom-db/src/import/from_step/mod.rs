@@ -127,7 +127,42 @@ pub(super) fn model(file: &StepFile) -> Result<CadModel, Error> {
     for &(shell, sense) in &roots.shells {
         f.shell(shell, sense)?;
     }
+    warn_unsupported(file, &mut f.model.warnings);
     Ok(f.model)
+}
+
+/// Words of the type names of geometric and topological entities ...
+const GEOMETRIC: [&str; 8] = [
+    "SURFACE", "CURVE", "SOLID", "SHELL", "FACE", "EDGE", "LOOP", "VERTEX",
+];
+/// ... and of the presentation and product data that name them (not geometry).
+const NOT_GEOMETRIC: [&str; 8] = [
+    "STYLE",
+    "REPRESENTATION",
+    "PRESENTATION",
+    "RELATIONSHIP",
+    "USAGE",
+    "DEFINITION",
+    "ASSIGNMENT",
+    "PROPERTY",
+];
+
+/// Names every instance of a geometric or topological type the reader does not know (it
+/// was skipped: no shell holds it, or the shell would have failed naming it).
+fn warn_unsupported(file: &StepFile, warnings: &mut Vec<String>) {
+    for (inst, e) in file.iter() {
+        if !matches!(e, Entity::Other) {
+            continue;
+        }
+        let ty = inst.type_name();
+        if GEOMETRIC.iter().any(|w| ty.contains(w)) && !NOT_GEOMETRIC.iter().any(|w| ty.contains(w))
+        {
+            warnings.push(format!(
+                "#{} (line {}, {ty}) is not supported and was skipped",
+                inst.id.0, inst.line
+            ));
+        }
+    }
 }
 
 /// Solids, surface models and the shells no solid or model holds.
