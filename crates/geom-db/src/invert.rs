@@ -347,7 +347,12 @@ fn lattice_starts<const D: usize>(d2: &[f64], dims: [usize; D], k: usize) -> Vec
         out
     };
     let mut minima: Vec<usize> = (0..d2.len())
-        .filter(|&i| d2[i].is_finite() && neighbours(i).iter().all(|&j| !(d2[j] < d2[i])))
+        .filter(|&i| {
+            d2[i].is_finite()
+                && neighbours(i)
+                    .iter()
+                    .all(|&j| d2[j] >= d2[i] || d2[j].is_nan())
+        })
         .collect();
     minima.sort_by(|&a, &b| d2[a].total_cmp(&d2[b]).then(a.cmp(&b)));
     let mut out: Vec<usize> = Vec::with_capacity(k);

@@ -307,7 +307,7 @@ fn driver(pair: &Pair<'_>, ys: &[[f64; 4]]) -> Option<usize> {
 fn free_sine(pair: &Pair<'_>, y: &[f64; 4], k: usize) -> f64 {
     let (own, other) = (k / 2, 1 - k / 2);
     let d = pair.s[own].derivs(y[2 * own], y[2 * own + 1]);
-    let free: Vector3 = if k % 2 == 0 { d.dv } else { d.du };
+    let free: Vector3 = if k.is_multiple_of(2) { d.dv } else { d.du };
     let n = pair.s[other].normal(y[2 * other], y[2 * other + 1]);
     match (n, free.norm()) {
         (Some(n), f) if f > 0.0 => n.dot(&free).abs() / f,
