@@ -384,9 +384,13 @@ fn curves_on_borders(db: &mut GeomDb, faces: &Faces, sewn: &Sewn) {
         let mut supports: Vec<usize> = s.uses.iter().map(|u| faces.faces[u.face].support).collect();
         supports.dedup();
         let curve = &db.curves[k];
-        let Some(border) = supports
+        // On the borders of two supports (the M6's tip edge is a border of its lower wing
+        // surface and of its tip cap, 3.5e-7 m apart), the curve follows the one it fits
+        // best: the one the file's curve was made from.
+        let Some((border, _)) = supports
             .iter()
-            .find_map(|&i| border_of(&db.surfaces[i], &curve.arcs, faces.sew))
+            .filter_map(|&i| border_of(&db.surfaces[i], &curve.arcs, faces.sew))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
         else {
             continue;
         };
@@ -411,8 +415,9 @@ fn curves_on_borders(db: &mut GeomDb, faces: &Faces, sewn: &Sewn) {
 }
 
 /// The whole border of `sup` (its patches' border arcs, in order) along which the curve
-/// made of `arcs` runs within `tol`, if any.
-fn border_of(sup: &SupportSurface, arcs: &[Arc], tol: f64) -> Option<Vec<Arc>> {
+/// made of `arcs` runs within `tol`, if any, with the curve's largest distance from it (the
+/// best-fitting side when several do).
+fn border_of(sup: &SupportSurface, arcs: &[Arc], tol: f64) -> Option<(Vec<Arc>, f64)> {
     let (nu, nv) = (sup.n_u, sup.n_v);
     let sides: [Vec<Arc>; 4] = [
         (0..nv)
@@ -429,10 +434,15 @@ fn border_of(sup: &SupportSurface, arcs: &[Arc], tol: f64) -> Option<Vec<Arc>> {
             .collect(),
     ];
     let probe = super::curve_samples(arcs, 8);
-    sides.into_iter().find(|side| {
-        let samples = super::curve_samples(side, 16);
-        probe
-            .iter()
-            .all(|(_, p)| super::foot_on_arcs(side, &samples, p).0 <= tol)
-    })
+    sides
+        .into_iter()
+        .filter_map(|side| {
+            let samples = super::curve_samples(&side, 16);
+            let worst = probe
+                .iter()
+                .map(|(_, p)| super::foot_on_arcs(&side, &samples, p).0)
+                .fold(0.0, f64::max);
+            (worst <= tol).then_some((side, worst))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
 }
