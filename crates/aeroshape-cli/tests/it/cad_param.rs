@@ -126,7 +126,7 @@ fn case_text(db: &GeomDb) -> String {
 
 /// Largest distance of the junctions (curves with two defining surfaces) from their
 /// surfaces, 4 samples per arc of each curve component (at least 200).
-fn junction_gap(db: &GeomDb) -> f64 {
+pub(crate) fn junction_gap(db: &GeomDb) -> f64 {
     let opts = InvertOptions::for_model(db);
     let mut worst: f64 = 0.0;
     for cc in &db.curve_components {

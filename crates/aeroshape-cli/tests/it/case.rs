@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use geom_db::GeomDb;
+use geom_db::eval::ParamCurve;
 use geom_db::prelude::Point3;
 
 pub(crate) fn bin() -> Command {
@@ -205,6 +206,26 @@ fn init_list_and_run_on_the_m6_iges_and_its_gmsh_grid() {
     let grid = root().join("fixtures/grids/oneram6.su2");
     let init = three_commands(&cad, &grid, dir.path(), 0.3, true);
     assert!(init.contains("sewing gap"), "{init}");
+    // The grid's wall nodes (on OpenCASCADE's edges, made from the file's curves) lie on the
+    // imported model within 1e-8 of its size: each edge on the borders of two supports (the
+    // tip edges: a wing surface's and a tip cap's, 3.5e-7 m apart) follows the one the
+    // file's curve fits (5.1e-9 m; 3.5e-7 m on the other), and a tip thickness change keeps
+    // the lower surface's boundary nodes on it.
+    let db = GeomDb::from_ron_str(
+        &std::fs::read_to_string(dir.path().join("case/geometry.ron")).unwrap(),
+        "geometry.ron",
+    )
+    .unwrap();
+    let dist: f64 = init
+        .split("distance max ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no wall distance in {init}"));
+    assert!(
+        dist <= 1e-8 * db.reference_length(),
+        "wall nodes {dist:e} off the imported model"
+    );
     assert!(init.contains("split at the leading edge"), "{init}");
     for want in ["wall", "slide", "fixed"] {
         assert!(init.contains(want), "{init}");
@@ -219,6 +240,101 @@ fn init_list_and_run_on_the_m6_iges_and_its_gmsh_grid() {
     ] {
         assert!(init.contains(want), "{want} missing: {init}");
     }
+}
+
+/// The OpenCASCADE wing-body (AP214 STEP: fuselage, wing, tip and tail caps) with the Gmsh
+/// grid made from it (`fixtures/grids/wing_body.su2`), the user case of issue 20 on the
+/// import of issue 19: `case init` finds the wing and the fuselage by shape and builds the
+/// wing master and the waist; every variable at 30 % of its bound at once passes
+/// [`three_commands`]'s checks. Then a tip twist at its bound: no inverted cell, and the
+/// wing-fuselage junction, re-intersected (Eq. 12), is sampled by `run` (≥ 200 points,
+/// `report.json`) and by this test's own projection on both surfaces, each within 1e-8 of
+/// the model size.
+#[test]
+fn init_list_and_run_on_the_occ_wing_body_step_and_its_gmsh_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let cad = root().join("fixtures/cad/wing_body_ap214_m.stp");
+    let grid = root().join("fixtures/grids/wing_body.su2");
+    let init = three_commands(&cad, &grid, dir.path(), 0.3, true);
+    assert!(init.contains("STEP uncertainty"), "{init}");
+    for want in [
+        "fuselage.waist",
+        "wing.sweep",
+        "wing.twist.tip",
+        "wing.chord.tip",
+        "wing.tmax.tip",
+    ] {
+        assert!(init.contains(want), "{want} missing: {init}");
+    }
+    let case = dir.path().join("case/case.ron");
+    let c = aeroshape::case::Case::load(&case).unwrap();
+    let twist = c
+        .parametrisation
+        .modifiers
+        .iter()
+        .flat_map(|m| m.variables())
+        .find(|v| v.name == "wing.twist.tip")
+        .unwrap()
+        .upper;
+    assert!(twist > 0.0);
+    let dv = dir.path().join("twist.ron");
+    std::fs::write(&dv, format!("{{\"wing.twist.tip\": {twist:e}}}")).unwrap();
+    let out = dir.path().join("twist");
+    ok(&bin()
+        .arg("run")
+        .arg(&case)
+        .arg("--dv")
+        .arg(&dv)
+        .arg("-o")
+        .arg(&out)
+        .arg("--no-pictures")
+        .output()
+        .unwrap());
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(rep["evaluation"]["quality_after"]["inverted"], 0);
+    let model = &rep["evaluation"]["model"];
+    assert!(
+        model["curves_reintersected"].as_u64().unwrap() >= 1,
+        "{model}"
+    );
+    let db = GeomDb::from_ron_str(
+        &std::fs::read_to_string(out.join("geometry.ron")).unwrap(),
+        "geometry.ron",
+    )
+    .unwrap();
+    let tol = 1e-8 * db.reference_length();
+    let junctions = model["junctions"].as_array().unwrap();
+    assert!(!junctions.is_empty(), "{model}");
+    for j in junctions {
+        assert!(j["samples"].as_u64().unwrap() >= 200, "{j}");
+        for d in j["max"].as_array().unwrap() {
+            assert!(d.as_f64().unwrap() <= tol, "{j}");
+        }
+    }
+    // the junction moved with the wing, and this test's projection agrees
+    let base = GeomDb::from_ron_str(
+        &std::fs::read_to_string(dir.path().join("case/geometry.ron")).unwrap(),
+        "geometry.ron",
+    )
+    .unwrap();
+    let k = base
+        .curves
+        .iter()
+        .position(|c| c.defining_surfaces.len() == 2)
+        .expect("a junction with its two defining surfaces");
+    let moved = (0..=20)
+        .map(|i| {
+            let t = base.curves[k].arcs.len() as f64 * i as f64 / 20.0;
+            (base.curves[k].point(t) - db.curves[k].point(t)).norm()
+        })
+        .fold(0.0, f64::max);
+    assert!(moved > 1e-4, "the junction did not move ({moved:e})");
+    let gap = crate::cad_param::junction_gap(&db);
+    assert!(
+        gap <= tol,
+        "junction {gap:e} off its surfaces (tolerance {tol:e})"
+    );
 }
 
 /// A geometric database without control nodes is refused in one line naming the file.
