@@ -6,11 +6,10 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Context;
 use clap::Args;
 use serde::Serialize;
 
-use aeroshape::case::{Case, load_design_values};
+use aeroshape::case::Case;
 use aeroshape::fsio::{ensure_not_input, write_atomic};
 use aeroshape::sensitivity::{self, Layout};
 use aeroshape::study::Study;
@@ -69,15 +68,7 @@ pub fn run(a: GradientArgs) -> anyhow::Result<()> {
     let input_refs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
     ensure_not_input(&a.output, &input_refs).map_err(anyhow::Error::msg)?;
     let study = Study::new(case, &a.case)?;
-    let x = match &a.dv {
-        Some(p) => {
-            let values = load_design_values(p)?;
-            study
-                .vector_from_values(&values)
-                .with_context(|| p.display().to_string())?
-        }
-        None => study.initial(),
-    };
+    let x = super::run::design_vector(&study, a.dv.as_deref())?;
     super::param::check_constraints(
         &study.case().parametrisation,
         &x,

@@ -104,15 +104,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         s.classify_max_distance,
         s.read + s.param + s.model + s.classify
     );
-    let x = match &a.dv {
-        Some(p) => {
-            let values = load_design_values(p)?;
-            study
-                .vector_from_values(&values)
-                .with_context(|| p.display().to_string())?
-        }
-        None => study.initial(),
-    };
+    let x = design_vector(&study, a.dv.as_deref())?;
     super::param::check_constraints(
         &study.case().parametrisation,
         &x,
@@ -271,4 +263,17 @@ fn span_range(db: &GeomDb, wings: &[SurfaceId]) -> (f64, f64) {
         }
     }
     (lo, hi)
+}
+
+/// The design vector of `--dv FILE` (its values by name), or the case's initial one.
+pub(crate) fn design_vector(study: &Study, dv: Option<&Path>) -> anyhow::Result<Vec<f64>> {
+    match dv {
+        Some(p) => {
+            let values = load_design_values(p)?;
+            study
+                .vector_from_values(&values)
+                .with_context(|| p.display().to_string())
+        }
+        None => Ok(study.initial()),
+    }
 }
