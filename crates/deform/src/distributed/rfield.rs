@@ -36,21 +36,7 @@ impl Rotations {
             return [0.0; 3];
         }
         let d = [x[j][0] - x[i][0], x[j][1] - x[i][1], x[j][2] - x[i][2]];
-        let c = |a: [f64; 3], b: [f64; 3]| {
-            [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ]
-        };
-        let ud = c(u, d);
-        let uud = c(u, ud);
-        let f = 2.0 / l2;
-        [
-            f * (w * ud[0] + uud[0]),
-            f * (w * ud[1] + uud[1]),
-            f * (w * ud[2] + uud[2]),
-        ]
+        crate::rfield::rot_minus_id(u, w, l2, d)
     }
 }
 
