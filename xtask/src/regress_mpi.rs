@@ -6,8 +6,9 @@
 //! 2. On the ~100k-node Gmsh wing-body grid (`target/grids/wing_body.su2`, made by
 //!    `fixtures/grids/make_grids.py --size 100k` when absent): the serial `aeroshape deform`
 //!    and `mpirun -n 2` and `-n 3 --oversubscribe` of the same command (the partition made
-//!    on rank 0); every node of the gathered grid within 1e-8 of the serial one, relative to
-//!    the largest displacement, and no cell with q ≤ 0.
+//!    on rank 0 by METIS, which the report must name); every node of the gathered grid
+//!    within 1e-8 of the serial one, relative to the largest displacement, and no cell with
+//!    q ≤ 0. The `.pvtu` run (-n 3) cuts by coordinate bisection (`--partition rcb`).
 //! 3. The partition given by the caller (`distributed` example, 3 ranks) against the serial
 //!    result, and two bad partitions (a missing ghost, a global id owned twice): exit status
 //!    1 with the error on every rank, within a time limit (a hang fails).
@@ -166,7 +167,7 @@ fn pieces(
     }
     let o = out.join("ranks3.pvtu");
     let os = o.display().to_string();
-    let mut args = vec!["deform", g, "-o", os.as_str()];
+    let mut args = vec!["deform", g, "-o", os.as_str(), "--partition", "rcb"];
     args.extend(FLAGS);
     let res = mpirun(3, bin, &args)?;
     if !res.status.success() {
@@ -292,9 +293,19 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
         let inverted = report["quality_after"]["n_nonpositive"].as_u64();
         let dist = &report["distributed"];
         println!(
-            "regress: mpi -n {n}: deviation from serial {rel:.3e} relative, {} + {} iterations (coarse aggregates {}), inverted cells {inverted:?}",
-            dist["iterations"], dist["rotation_iterations"], dist["coarse_aggregates"]
+            "regress: mpi -n {n}: deviation from serial {rel:.3e} relative, {} + {} iterations (coarse aggregates {}), partition {}, {} ghost nodes, inverted cells {inverted:?}",
+            dist["iterations"],
+            dist["rotation_iterations"],
+            dist["coarse_aggregates"],
+            dist["partitioner"],
+            dist["ghost_nodes"]
         );
+        if dist["partitioner"] != "metis" {
+            drift.push(format!(
+                "mpi: -n {n}: the grid was partitioned by {}, not METIS",
+                dist["partitioner"]
+            ));
+        }
         if rel.is_nan() || rel > REL {
             drift.push(format!(
                 "mpi: -n {n}: deviation {rel:e} from the serial result exceeds {REL:e}"

@@ -95,6 +95,14 @@ pub struct DeformArgs {
     #[cfg(feature = "mpi")]
     #[arg(long, value_name = "N", default_value_t = deform::distributed::COARSE_PARTS)]
     pub coarse_parts: usize,
+    /// Under mpirun: how rank 0 cuts the grid into one part per rank: `metis` (METIS k-way
+    /// on the node graph; coordinate bisection if METIS fails) or `rcb` (recursive coordinate
+    /// bisection; docs/mpi.md).
+    #[cfg(feature = "mpi")]
+    #[arg(long, default_value_t = deform::distributed::Partitioner::Metis,
+          value_parser = NameParser::<deform::distributed::Partitioner>::new(
+              deform::distributed::Partitioner::ALL.map(deform::distributed::Partitioner::name)))]
+    pub partition: deform::distributed::Partitioner,
 }
 
 /// A `--rotation-reach` value: a length ≥ 0.

@@ -83,7 +83,7 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
     let input = input.transpose()?;
     let seconds_read = t.elapsed().as_secs_f64();
     let whole = input.as_ref().map(|(m, bc)| (m, bc));
-    let d = Deformer::from_root(&world, whole, &opts)
+    let d = Deformer::from_root_with(&world, whole, &opts, args.partition)
         .with_context(|| format!("{}", args.mesh.display()))?
         .coarse_parts(args.coarse_parts);
     let out = d

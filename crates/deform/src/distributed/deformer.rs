@@ -16,6 +16,7 @@ use sparse::{Constraints, V3};
 use super::coarse::{CoarseOp, CoarseSpace};
 use super::comm::{Comm, agree, max, min, sum_u64};
 use super::halo::Halo;
+use super::metis::Partitioner;
 use super::partition::{LocalGrid, Partition};
 use super::rfield::{Ctx, rotations};
 use super::scatter::Local;
@@ -38,6 +39,9 @@ pub struct DistReport {
     pub unknowns: u64,
     /// Ghost nodes over the ranks (the partition surface, counted on the receiving side).
     pub ghost_nodes: u64,
+    /// How the parts were made: `given` (by the caller), `metis`, `rcb`, or
+    /// `rcb (METIS failed)` (on rank 0).
+    pub partitioner: String,
     /// Increments of the last attempt and the increment counts tried.
     pub increments: usize,
     /// The increment counts tried.
@@ -146,16 +150,27 @@ impl<'c> Deformer<'c> {
     }
 
     /// The set-up from the whole grid on rank 0 (`whole`: `Some` on rank 0, `None` on the
-    /// others), partitioned there by coordinate bisection and scattered; the boundary
-    /// conditions are those of the serial [`crate::deform`]. Collective.
+    /// others), partitioned there by METIS (coordinate bisection when METIS fails) and
+    /// scattered; the boundary conditions are those of the serial [`crate::deform`].
+    /// Collective.
     pub fn from_root(
         comm: &'c Comm,
         whole: Option<(&Mesh, &BoundaryConditions)>,
         opts: &DeformOptions,
     ) -> Result<Self> {
+        Self::from_root_with(comm, whole, opts, Partitioner::Metis)
+    }
+
+    /// [`Deformer::from_root`] with the partitioner of rank 0 chosen (`by` is read on rank 0).
+    pub fn from_root_with(
+        comm: &'c Comm,
+        whole: Option<(&Mesh, &BoundaryConditions)>,
+        opts: &DeformOptions,
+        by: Partitioner,
+    ) -> Result<Self> {
         check_options(comm, opts)?;
         let t = Instant::now();
-        let local = Local::from_root(comm, whole, opts)?;
+        let local = Local::from_root(comm, whole, opts, by)?;
         Self::set_up(comm, local, opts, t)
     }
 
@@ -287,6 +302,7 @@ impl<'c> Deformer<'c> {
             nodes: part.n_global,
             unknowns: sum_u64(comm, self.sys.node_of.len() as u64),
             ghost_nodes: sum_u64(comm, (x0.len() - part.grid.n_owned) as u64),
+            partitioner: self.local.made_by.to_string(),
             bytes_per_iteration: sum_u64(comm, self.unk_halo.bytes_sent(3) as u64),
             ..DistReport::default()
         };

@@ -5,7 +5,9 @@
 //!   then ghosts, and the cells around the owned nodes) and its validated form
 //!   ([`Partition`]: one owner per node, ghost layer complete, node halo built once); a bad
 //!   part gives the same error on every rank, never a hang.
-//! - [`mod@rcb`]: recursive coordinate bisection, and the parts of a whole grid on rank 0.
+//! - [`mod@metis`]: METIS's k-way partition of a whole grid's node graph on rank 0, with
+//!   [`mod@rcb`] (recursive coordinate bisection) as its fallback and alternative; `rcb` also
+//!   makes the parts of the whole grid.
 //! - `scatter`: each rank's share of the problem (its part and the roles of its nodes),
 //!   given by the caller or made on rank 0 and sent.
 //! - `halo`: the non-blocking exchange of ghost values; `comm`: the all-reduces, the
@@ -20,6 +22,7 @@ mod coarse;
 mod comm;
 pub mod deformer;
 mod halo;
+pub mod metis;
 pub mod partition;
 pub mod rcb;
 mod rfield;
@@ -28,6 +31,7 @@ mod solve;
 
 pub use comm::Comm;
 pub use deformer::{COARSE_PARTS, Deformer, DistDeformed, DistReport, DistSeconds};
+pub use metis::{Cut, Partitioner};
 /// The MPI bindings (rsmpi) the distributed deformation is built on, for the caller's
 /// `mpi::initialize()` and communicators.
 pub use mpi;

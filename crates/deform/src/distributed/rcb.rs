@@ -2,10 +2,10 @@
 //! parts of a whole grid cut along it (owned nodes, the cells around them, ghost nodes,
 //! boundary elements), as rank 0 makes them before it scatters them.
 //!
-//! Written here rather than taken from a crate: the METIS bindings need a C build of METIS
-//! (Debian's libmetis-dev and bindgen) for a graph partition whose only use here is a smaller
-//! partition surface; bisection along the longest axis is ~40 lines, deterministic, and
-//! gives surfaces within a small factor of METIS's on the wing grids (docs/mpi.md).
+//! Bisection is the fallback of METIS's graph partition ([`super::metis`]) and an option of
+//! its own (`--partition rcb`): ~40 lines, deterministic, any number of parts, no graph. Its
+//! straight cuts leave 1.5 to 2 times METIS's ghost nodes on the wing-body grid at 2 to 4
+//! ranks (docs/perf-log/2026-12-03-mpi-metis.md).
 
 use mesh::{Elements, Marker, Mesh};
 

@@ -2,14 +2,16 @@
 //! the roles of its nodes (moving, fixed, sliding, free), with the skin elements and rigid
 //! motions they need. Made either by each rank from its own part ([`Local::given`]), or on
 //! rank 0 from the whole grid ([`Local::from_root`]): rank 0 classifies every node as the
-//! serial deformation does, cuts the grid by [`super::rcb`], and sends each rank its part.
+//! serial deformation does, cuts the grid by METIS or coordinate bisection
+//! ([`super::metis::cut`]), and sends each rank its part.
 
 use mesh::{ElementKind, Mesh};
 use mpi::traits::*;
 
 use super::comm::{Comm, agree};
+use super::metis::{Partitioner, cut};
 use super::partition::{LocalGrid, Partition};
-use super::rcb::{parts, rcb};
+use super::rcb::parts;
 use crate::bc::{BoundaryConditions, Classified, MarkerRole, NodeRole, RigidMotion, classify};
 use crate::error::{Error, Result};
 use crate::options::DeformOptions;
@@ -22,7 +24,12 @@ pub(crate) struct Local {
     pub cls: Classified,
     /// The prescribed displacements of the local nodes that have one.
     pub disp: Vec<[f64; 3]>,
+    /// How the parts were made: `given`, `metis`, `rcb`, or `rcb (METIS failed)`.
+    pub made_by: &'static str,
 }
+
+/// The ways rank 0 made the parts, as it broadcasts them (index + 1; 0: it failed).
+const MADE_BY: [&str; 3] = ["metis", "rcb", "rcb (METIS failed)"];
 
 impl Local {
     /// From each rank's own part: the roles come from its own markers (the boundary
@@ -53,66 +60,82 @@ impl Local {
         })();
         let cls = agree(comm, cls)?;
         let disp = bc.displacements.iter().map(|d| d.1).collect();
-        Ok(Self { part, cls, disp })
+        Ok(Self {
+            part,
+            cls,
+            disp,
+            made_by: "given",
+        })
     }
 
     /// From the whole grid on rank 0 (`whole` is read on rank 0 only; the other ranks pass
     /// None): classification as the serial deformation, cut into `comm.size()` parts by
-    /// coordinate bisection, each part sent to its rank.
+    /// `by` (METIS falls back on coordinate bisection), each part sent to its rank.
     pub fn from_root(
         comm: &Comm,
         whole: Option<(&Mesh, &BoundaryConditions)>,
         opts: &DeformOptions,
+        by: Partitioner,
     ) -> Result<Self> {
         let root = comm.process_at_rank(0);
         let p = comm.size() as usize;
-        let mine: Result<Option<(Vec<u64>, Vec<f64>)>> = if comm.rank() == 0 {
+        type Piece = (Vec<u64>, Vec<f64>);
+        let mine: Result<Option<(Piece, u64)>> = if comm.rank() == 0 {
             let made = (|| {
                 let (m, bc) = whole.ok_or_else(|| Error::Distributed {
                     rank: 0,
                     reason: "rank 0 was given no grid".into(),
                 })?;
                 let cls = classify(m, bc, opts.plane_rel_tol, None)?;
-                let part = rcb(&m.coords, p);
-                let grids = parts(m, &part, p);
-                let pieces: Vec<(Vec<u64>, Vec<f64>)> =
-                    grids.iter().map(|g| encode(g, &cls, bc)).collect();
-                Ok(pieces)
+                let c = cut(m, p, by);
+                let grids = parts(m, &c.part, p);
+                let pieces: Vec<Piece> = grids.iter().map(|g| encode(g, &cls, bc)).collect();
+                let how: u64 = match (c.by, c.fallback) {
+                    (Partitioner::Metis, _) => 1,
+                    (Partitioner::Rcb, None) => 2,
+                    (Partitioner::Rcb, Some(_)) => 3,
+                };
+                Ok((pieces, how))
             })();
             // The others wait for their part only when rank 0 has made them.
-            let mut ok = u64::from(made.is_ok());
+            let mut ok = made.as_ref().map_or(0, |m| m.1);
             root.broadcast_into(&mut ok);
-            made.map(|mut pieces| {
+            made.map(|(mut pieces, how)| {
                 for (r, piece) in pieces.iter().enumerate().skip(1) {
                     let dest = comm.process_at_rank(r as i32);
                     dest.send(&[piece.0.len() as u64, piece.1.len() as u64][..]);
                     dest.send(&piece.0[..]);
                     dest.send(&piece.1[..]);
                 }
-                Some(pieces.swap_remove(0))
+                Some((pieces.swap_remove(0), how))
             })
         } else {
             let mut ok = 0u64;
             root.broadcast_into(&mut ok);
-            if ok == 1 {
+            if ok > 0 {
                 let mut len = [0u64; 2];
                 root.receive_into(&mut len[..]);
                 let mut ints = vec![0u64; len[0] as usize];
                 let mut floats = vec![0.0f64; len[1] as usize];
                 root.receive_into(&mut ints[..]);
                 root.receive_into(&mut floats[..]);
-                Ok(Some((ints, floats)))
+                Ok(Some(((ints, floats), ok)))
             } else {
                 Ok(None)
             }
         };
-        let (ints, floats) = agree(comm, mine)?.ok_or_else(|| Error::Distributed {
+        let ((ints, floats), how) = agree(comm, mine)?.ok_or_else(|| Error::Distributed {
             rank: 0,
             reason: "no part received".into(),
         })?;
         let (grid, cls, disp) = agree(comm, decode(&ints, &floats))?;
         let part = Partition::new(comm, grid)?;
-        Ok(Self { part, cls, disp })
+        Ok(Self {
+            part,
+            cls,
+            disp,
+            made_by: MADE_BY.get(how as usize - 1).copied().unwrap_or("?"),
+        })
     }
 }
 

@@ -1,0 +1,190 @@
+//! The graph partitioner of a whole grid on rank 0: METIS's multilevel k-way partition of the
+//! node graph (the edges of the cells, the graph of the spring matrix), through the `metis`
+//! crate (metis-rs) and its vendored METIS 5 built from C. Recursive coordinate bisection
+//! ([`mod@super::rcb`]) is the fallback when METIS refuses the graph (more than 2^31 edge ends
+//! for its 32-bit indices, out of memory) or leaves a part empty, and an option of its own.
+//!
+//! METIS minimises the cut edges under a 3 % imbalance of nodes; the cut edges are what
+//! ghost nodes and halo bytes follow (docs/perf-log/2026-12-03-mpi-metis.md compares the two
+//! on the wing-body grid). Its result is deterministic (METIS's fixed seed) and does not
+//! depend on the thread count.
+
+use mesh::{Adjacency, Mesh};
+
+use super::rcb::rcb;
+
+/// How rank 0 cuts the whole grid into one part per rank ([`cut`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Partitioner {
+    /// METIS k-way on the node graph; coordinate bisection when METIS fails.
+    #[default]
+    Metis,
+    /// Recursive coordinate bisection ([`rcb`]).
+    Rcb,
+}
+
+impl Partitioner {
+    /// Every partitioner.
+    pub const ALL: [Partitioner; 2] = [Partitioner::Metis, Partitioner::Rcb];
+
+    /// The name used on the command line and in reports: `metis` or `rcb`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Partitioner::Metis => "metis",
+            Partitioner::Rcb => "rcb",
+        }
+    }
+}
+
+impl std::fmt::Display for Partitioner {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Partitioner {
+    type Err = String;
+
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "metis" => Ok(Partitioner::Metis),
+            "rcb" => Ok(Partitioner::Rcb),
+            _ => Err(format!("unknown partitioner {s:?} (metis or rcb)")),
+        }
+    }
+}
+
+/// A partition of the nodes of a grid ([`cut`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Cut {
+    /// The part (0..parts) of every node.
+    pub part: Vec<u32>,
+    /// The partitioner that made it.
+    pub by: Partitioner,
+    /// Why METIS was not used when it was asked for (the partition is then by bisection).
+    pub fallback: Option<String>,
+}
+
+/// The nodes of `mesh` cut into `parts` parts by `by`; METIS falls back on coordinate
+/// bisection, with the reason in [`Cut::fallback`].
+pub fn cut(mesh: &Mesh, parts: usize, by: Partitioner) -> Cut {
+    let bisect = |fallback| Cut {
+        part: rcb(&mesh.coords, parts),
+        by: Partitioner::Rcb,
+        fallback,
+    };
+    match by {
+        Partitioner::Rcb => bisect(None),
+        Partitioner::Metis => match metis(mesh, parts) {
+            Ok(part) => Cut {
+                part,
+                by: Partitioner::Metis,
+                fallback: None,
+            },
+            Err(reason) => bisect(Some(reason)),
+        },
+    }
+}
+
+/// The part (0..parts) of every node of `mesh` by METIS's k-way partition of its node graph
+/// (every part holding nodes); an error when METIS cannot take the graph or fails, or leaves
+/// a part without nodes.
+pub fn metis(mesh: &Mesh, parts: usize) -> std::result::Result<Vec<u32>, String> {
+    let n = mesh.n_nodes();
+    if parts <= 1 {
+        return Ok(vec![0; n]);
+    }
+    if n < parts {
+        return Err(format!("{n} nodes for {parts} parts"));
+    }
+    let adj = Adjacency::try_build(mesh).map_err(|e| e.to_string())?;
+    let wide = || {
+        format!(
+            "{} edge ends: beyond METIS's 32-bit indices",
+            adj.indices.len()
+        )
+    };
+    let xadj = adj
+        .offsets
+        .iter()
+        .map(|&o| metis::Idx::try_from(o))
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map_err(|_| wide())?;
+    let adjncy = adj
+        .indices
+        .iter()
+        .map(|&v| metis::Idx::try_from(v))
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map_err(|_| wide())?;
+    let nparts = metis::Idx::try_from(parts).map_err(|_| format!("{parts} parts"))?;
+    let mut part: Vec<metis::Idx> = vec![0; n];
+    metis::Graph::new(1, nparts, &xadj, &adjncy)
+        .map_err(|e| format!("METIS refused the node graph: {e}"))?
+        .part_kway(&mut part)
+        .map_err(|e| format!("METIS failed: {e}"))?;
+    let mut count = vec![0usize; parts];
+    for &q in &part {
+        let q = usize::try_from(q)
+            .ok()
+            .filter(|&q| q < parts)
+            .ok_or_else(|| format!("METIS returned part {q} of {parts}"))?;
+        count[q] += 1;
+    }
+    if let Some(q) = count.iter().position(|&c| c == 0) {
+        return Err(format!("METIS left part {q} of {parts} without nodes"));
+    }
+    Ok(part.into_iter().map(|q| q as u32).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Edges of `mesh` whose two nodes are in different parts.
+    fn cut_edges(mesh: &Mesh, part: &[u32]) -> usize {
+        Adjacency::build(mesh)
+            .edges()
+            .iter()
+            .filter(|e| part[e[0] as usize] != part[e[1] as usize])
+            .count()
+    }
+
+    #[test]
+    fn metis_balances_parts_within_its_tolerance_and_cuts_no_more_than_bisection() {
+        // Measured: METIS cuts 175, 291, 339, 582 edges, bisection 225, 382, 447, 760.
+        let m = mesh::generate::box_tets(12, 12, 3, [0.0; 3], [2.0, 2.0, 0.5]);
+        for parts in [2, 3, 4, 7] {
+            let p = metis(&m, parts).expect("METIS partitions a box grid");
+            let mut count = vec![0usize; parts];
+            for &q in &p {
+                count[q as usize] += 1;
+            }
+            let ideal = m.n_nodes() as f64 / parts as f64;
+            let hi = *count.iter().max().unwrap() as f64;
+            assert!(hi <= 1.03 * ideal + 1.0, "{parts} parts: {count:?}");
+            assert!(count.iter().all(|&c| c > 0), "{parts} parts: {count:?}");
+            let (cm, cr) = (cut_edges(&m, &p), cut_edges(&m, &rcb(&m.coords, parts)));
+            assert!(
+                cm <= cr,
+                "{parts} parts: METIS cuts {cm} edges, bisection {cr}"
+            );
+            // The same partition again (METIS's seed is fixed).
+            assert_eq!(metis(&m, parts).unwrap(), p);
+        }
+    }
+
+    #[test]
+    fn one_part_and_too_few_nodes() {
+        let m = mesh::generate::box_tets(1, 1, 1, [0.0; 3], [1.0; 3]);
+        assert_eq!(metis(&m, 1).unwrap(), vec![0; m.n_nodes()]);
+        let err = metis(&m, 9).unwrap_err();
+        assert!(err.contains("8 nodes for 9 parts"), "{err}");
+        let c = cut(&m, 9, Partitioner::Metis);
+        assert_eq!((c.by, c.part.len()), (Partitioner::Rcb, 8));
+        assert!(c.fallback.is_some_and(|r| r.contains("8 nodes")));
+        let c = cut(&m, 2, Partitioner::Rcb);
+        assert_eq!((c.by, c.fallback), (Partitioner::Rcb, None));
+        assert_eq!("metis".parse(), Ok(Partitioner::Metis));
+        assert!("scotch".parse::<Partitioner>().is_err());
+    }
+}
