@@ -33,7 +33,8 @@ const MADE_BY: [&str; 3] = ["metis", "rcb", "rcb (METIS failed)"];
 
 impl Local {
     /// From each rank's own part: the roles come from its own markers (the boundary
-    /// elements of its nodes) and `bc` (node displacements in local numbering). Sliding
+    /// elements of its nodes) and `bc` (node displacements in local numbering), the ghosts'
+    /// from their owners (a ghost's boundary elements need not all be on this rank). Sliding
     /// planes need the whole marker for their fit and are refused here.
     pub fn given(
         comm: &Comm,
@@ -58,8 +59,9 @@ impl Local {
             }
             classify(&part.grid.mesh, bc, opts.plane_rel_tol, None)
         })();
-        let cls = agree(comm, cls)?;
-        let disp = bc.displacements.iter().map(|d| d.1).collect();
+        let mut cls = agree(comm, cls)?;
+        let mut disp = bc.displacements.iter().map(|d| d.1).collect();
+        owners_roles(comm, &part, &mut cls, &mut disp);
         Ok(Self {
             part,
             cls,
@@ -145,6 +147,43 @@ const RIGID: u64 = 2;
 const DISPLACED: u64 = 3;
 const PLANE: u64 = 4;
 const LINE: u64 = 5;
+
+/// A role as five floats: its tag, its index, its payload (a displacement or a constraint
+/// direction).
+fn role_code(role: NodeRole, disp: &[[f64; 3]]) -> [f64; 5] {
+    let (tag, index, pay) = match role {
+        NodeRole::Free | NodeRole::OnSupport(_) => (FREE, 0, [0.0; 3]),
+        NodeRole::Fixed => (FIXED, 0, [0.0; 3]),
+        NodeRole::Rigid(m) => (RIGID, m, [0.0; 3]),
+        NodeRole::Displaced(k) => (DISPLACED, 0, disp[k]),
+        NodeRole::Sliding(Constraint::Plane(v)) => (PLANE, 0, v),
+        NodeRole::Sliding(Constraint::Line(v)) => (LINE, 0, v),
+    };
+    [tag as f64, index as f64, pay[0], pay[1], pay[2]]
+}
+
+/// The ghosts' roles as their owners classified them (collective): a ghost's own
+/// classification sees only the boundary elements whose nodes are all on this rank, and
+/// may take a node of a rigid marker for a free one. A displaced ghost's displacement is
+/// appended to `disp`.
+fn owners_roles(comm: &Comm, part: &Partition, cls: &mut Classified, disp: &mut Vec<[f64; 3]>) {
+    let mut v: Vec<[f64; 5]> = cls.roles.iter().map(|&r| role_code(r, disp)).collect();
+    part.halo.exchange(comm, &mut v);
+    for (i, c) in v.iter().enumerate().skip(part.grid.n_owned) {
+        let pay = [c[2], c[3], c[4]];
+        cls.roles[i] = match c[0] as u64 {
+            FIXED => NodeRole::Fixed,
+            RIGID => NodeRole::Rigid(c[1] as usize),
+            DISPLACED => {
+                disp.push(pay);
+                NodeRole::Displaced(disp.len() - 1)
+            }
+            PLANE => NodeRole::Sliding(Constraint::Plane(pay)),
+            LINE => NodeRole::Sliding(Constraint::Line(pay)),
+            _ => NodeRole::Free,
+        };
+    }
+}
 
 /// A part and its nodes' roles as integers and floats (what rank 0 sends).
 fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> (Vec<u64>, Vec<f64>) {
