@@ -37,6 +37,34 @@ pub fn indices<'py>(py: Python<'py>, v: &[u32]) -> Bound<'py, PyArray1<i64>> {
     PyArray1::from_array(py, &ArrayView1::from(&wide[..]))
 }
 
+/// An int64 vector of global node ids.
+pub fn ids<'py>(py: Python<'py>, v: &[u64]) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let wide = v
+        .iter()
+        .map(|&i| i64::try_from(i))
+        .collect::<Result<Vec<i64>, _>>()
+        .map_err(|_| PyValueError::new_err("a global id beyond int64"))?;
+    Ok(PyArray1::from_array(py, &ArrayView1::from(&wide[..])))
+}
+
+/// Reads a 1-D array-like of non-negative integers (global ids) into a `Vec`.
+pub fn read_ids(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<u64>> {
+    let a: PyArrayLike1<'_, i64, AllowTypeChange> = obj.extract().map_err(|_| {
+        PyTypeError::new_err(format!(
+            "{what}: expected a one-dimensional array of integers"
+        ))
+    })?;
+    a.as_array()
+        .iter()
+        .enumerate()
+        .map(|(k, &g)| {
+            u64::try_from(g).map_err(|_| {
+                PyValueError::new_err(format!("{what}: entry {k} is {g}, not a global id"))
+            })
+        })
+        .collect()
+}
+
 /// A dense `rows × cols` float64 matrix from its rows (all of length `cols`).
 pub fn matrix<'py>(py: Python<'py>, rows: &[Vec<f64>], cols: usize) -> Bound<'py, PyArray2<f64>> {
     let flat: Vec<f64> = rows.iter().flatten().copied().collect();

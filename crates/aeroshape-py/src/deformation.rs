@@ -179,43 +179,24 @@ pub fn deform_mesh(
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<PyDeformation> {
     let m = &mesh.inner;
-    if rigid.is_empty() && (rotate_deg != 0.0 || translate != [0.0; 3]) {
-        return Err(PyValueError::new_err(
-            "rotate_deg/translate need a marker to move: give rigid=[MARKER]",
-        ));
-    }
-    if !rotate_deg.is_finite() {
-        return Err(PyValueError::new_err(format!(
-            "rotate_deg: {rotate_deg} is not a finite number"
-        )));
-    }
-    if !(tolerance.is_finite() && tolerance > 0.0) {
-        return Err(PyValueError::new_err(format!(
-            "tolerance: {tolerance} must be a positive number"
-        )));
-    }
-    let motion = RigidMotion {
-        angle_deg: rotate_deg,
-        axis_point: vec3(axis_point, "axis_point")?,
-        axis_dir: vec3(axis_dir, "axis_dir")?,
-        translation: vec3(translate, "translate")?,
-    };
-    let mut request = ::deform::Request {
+    let motion = Motion {
         rigid,
+        rotate_deg,
+        axis_point,
+        axis_dir,
+        translate,
+    };
+    let mut request = self::request(
+        m.n_nodes(),
         motion,
-        displacements: match &displacements {
-            Some(d) => self::displacements(d, m.n_nodes())?,
-            None => Vec::new(),
-        },
+        displacements.as_ref(),
         slide,
         fixed,
-        solver: named::<SolverKind>("solver", solver)?,
-        stiffness: named::<Stiffness>("stiffness", stiffness)?,
-        adapt_rotation: !no_rotation,
-        rotation_reach: None,
-        rel_tol: tolerance,
+        [solver, stiffness],
+        no_rotation,
+        tolerance,
         allow_inverted,
-    };
+    )?;
     // as `aeroshape deform`: a node of a fixed marker never moves where it meets a sliding one
     aeroshape::precedence::hold_fixed_nodes(m, &mut request);
     let mut prog = Progress::new(py, "deform", progress)?;
@@ -249,5 +230,73 @@ pub fn deform_mesh(
         cell_quality: arrays::vector(py, &d.cell_quality).into_any().unbind(),
         report: arrays::to_python(py, &d.report)?.unbind(),
         mesh: Py::new(py, PyMesh::from_rust(out))?,
+    })
+}
+
+/// The rigid motion keywords of `deform`.
+pub(crate) struct Motion {
+    pub rigid: Vec<String>,
+    pub rotate_deg: f64,
+    pub axis_point: [f64; 3],
+    pub axis_dir: [f64; 3],
+    pub translate: [f64; 3],
+}
+
+/// The deformation request of the keywords of `deform` on a grid of `n_nodes` nodes, checked
+/// as the command line checks its flags (`[solver, stiffness]` by their names).
+pub(crate) fn request(
+    n_nodes: usize,
+    motion: Motion,
+    displacements: Option<&Bound<'_, PyAny>>,
+    slide: Vec<String>,
+    fixed: Vec<String>,
+    [solver, stiffness]: [&str; 2],
+    no_rotation: bool,
+    tolerance: f64,
+    allow_inverted: bool,
+) -> PyResult<::deform::Request> {
+    let Motion {
+        rigid,
+        rotate_deg,
+        axis_point,
+        axis_dir,
+        translate,
+    } = motion;
+    if rigid.is_empty() && (rotate_deg != 0.0 || translate != [0.0; 3]) {
+        return Err(PyValueError::new_err(
+            "rotate_deg/translate need a marker to move: give rigid=[MARKER]",
+        ));
+    }
+    if !rotate_deg.is_finite() {
+        return Err(PyValueError::new_err(format!(
+            "rotate_deg: {rotate_deg} is not a finite number"
+        )));
+    }
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "tolerance: {tolerance} must be a positive number"
+        )));
+    }
+    let motion = RigidMotion {
+        angle_deg: rotate_deg,
+        axis_point: vec3(axis_point, "axis_point")?,
+        axis_dir: vec3(axis_dir, "axis_dir")?,
+        translation: vec3(translate, "translate")?,
+    };
+    Ok(::deform::Request {
+        rigid,
+        motion,
+        displacements: match displacements {
+            Some(d) => self::displacements(d, n_nodes)?,
+            None => Vec::new(),
+        },
+        slide,
+        fixed,
+        solver: named::<SolverKind>("solver", solver)?,
+        stiffness: named::<Stiffness>("stiffness", stiffness)?,
+        adapt_rotation: !no_rotation,
+        rotation_reach: None,
+        rel_tol: tolerance,
+        allow_inverted,
     })
 }

@@ -10,6 +10,8 @@
 //! - [`grid`]: `Mesh`, `read_mesh`, `write_mesh`.
 //! - [`deformation`]: `deform(mesh, rigid=..., slide=..., fixed=..., ...)`, the keywords of
 //!   `aeroshape deform`.
+//! - `distributed` (cargo feature `mpi`): `deform_distributed`, the distributed deformation
+//!   on an mpi4py communicator's processes (`aeroshape.distributed.deform`).
 //! - [`section`]: `section_fit` and `section_build`, as `aeroshape section fit|build`.
 //! - [`errors`]: Rust errors → Python exceptions carrying the command line's messages.
 //! - [`progress`]: progress to a callback or the `logging` logger `"aeroshape"`.
@@ -22,6 +24,8 @@ use pyo3::prelude::*;
 
 pub mod arrays;
 pub mod deformation;
+#[cfg(feature = "mpi")]
+pub mod distributed;
 pub mod errors;
 pub mod grid;
 pub mod linearise;
@@ -43,6 +47,11 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(grid::write_mesh, m)?)?;
     m.add_class::<deformation::PyDeformation>()?;
     m.add_function(wrap_pyfunction!(deformation::deform_mesh, m)?)?;
+    #[cfg(feature = "mpi")]
+    {
+        m.add_class::<distributed::PyDistributedDeformation>()?;
+        m.add_function(wrap_pyfunction!(distributed::deform_distributed, m)?)?;
+    }
     m.add_class::<section::PySectionFit>()?;
     m.add_function(wrap_pyfunction!(section::section_fit, m)?)?;
     m.add_function(wrap_pyfunction!(section::section_build, m)?)?;

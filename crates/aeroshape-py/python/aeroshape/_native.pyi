@@ -352,6 +352,39 @@ def deform(
     classified, else on their plane; ``fixed`` and unnamed markers stay. The GIL is released
     while it runs. Raises :class:`DeformError` when the deformation fails."""
 
+# Present only when the package is built with its cargo feature ``mpi``
+# (``aeroshape.distributed``).
+@final
+class DistributedDeformation:
+    """The result of ``aeroshape.distributed.deform`` on one rank."""
+
+    @property
+    def coordinates(self) -> _Float64Array | None:
+        """The whole grid's new coordinates in global-id order (rank 0; ``None`` elsewhere)."""
+    @property
+    def local_coordinates(self) -> _Float64Array:
+        """This rank's nodes (owned first, then ghosts) at their new positions, ``n × 3``."""
+    @property
+    def global_ids(self) -> _Int64Array:
+        """Global id of every local node."""
+    @property
+    def n_owned(self) -> int:
+        """Number of owned nodes (the first rows of ``local_coordinates``)."""
+    @property
+    def report(self) -> dict[str, Any]:
+        """The distributed report (ranks, ghost nodes, partitioner, iterations, bytes...)."""
+
+def deform_distributed(
+    world_ranks: Sequence[int],
+    rank: int,
+    mesh: Mesh | _StrPath | None,
+    global_ids: _ArrayLike | None = None,
+    n_owned: int | None = None,
+    **keywords: Any,
+) -> DistributedDeformation:
+    """The Rust half of ``aeroshape.distributed.deform`` (the communicator as the world ranks
+    of its processes, and this process's rank in it)."""
+
 @final
 class SectionFit:
     """A fitted wing section (Eq. 39 thickness parameters, B-spline camber)."""

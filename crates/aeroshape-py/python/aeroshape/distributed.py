@@ -1,0 +1,81 @@
+"""The distributed deformation on the processes of an mpi4py communicator.
+
+Needs the package built with its cargo feature ``mpi`` (``MATURIN_PEP517_ARGS="--features
+mpi" pip install ./crates/aeroshape-py``) and mpi4py on the same MPI library (Debian's Open
+MPI). Run under ``mpirun -n N python script.py``; every process of ``comm`` calls
+:func:`deform` together. See ``docs/python.md``, "MPI", and ``docs/mpi.md``.
+
+The communicator is handed to the Rust side as the ``MPI.COMM_WORLD`` ranks of its processes
+(``Group.Translate_ranks``), from which a communicator over the same processes in the same
+order is made there with safe MPI calls (``MPI_Comm_create_group``): no handle crosses the
+language boundary as a raw pointer, and the deformation's messages never meet the caller's.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from . import _native
+
+__all__ = ["available", "deform"]
+
+
+def available() -> bool:
+    """True when the package was built with the cargo feature ``mpi``."""
+    return hasattr(_native, "deform_distributed")
+
+
+def deform(
+    comm: Any,
+    mesh: Any = None,
+    *,
+    global_ids: Any = None,
+    n_owned: int | None = None,
+    **keywords: Any,
+) -> _native.DistributedDeformation:
+    """Deforms a grid over the processes of ``comm`` (an ``mpi4py.MPI.Intracomm``); collective.
+
+    Two ways in:
+
+    - the whole grid on rank 0: ``mesh`` is a :class:`aeroshape.Mesh` or the path of a grid
+      file (read on rank 0) on rank 0 and ``None`` elsewhere. Rank 0 classifies the nodes as
+      the serial :func:`aeroshape.deform` does, partitions the grid (``partition="metis"``,
+      the default, or ``"rcb"``) and sends each rank its part;
+    - each rank's own part: ``mesh`` is the rank's local grid (an :class:`aeroshape.Mesh` of
+      its owned nodes first, then its ghosts, the cells around its owned nodes and the
+      boundary elements of its nodes under the markers' global names), ``global_ids`` the
+      global id of every local node (0..N over the ranks, each owned by one rank) and
+      ``n_owned`` the number of owned nodes. Markers may be ``rigid`` or ``fixed``;
+      ``displacements`` are in local numbering.
+
+    The keywords are those of :func:`aeroshape.deform` (``rigid``, ``rotate_deg``,
+    ``axis_point``, ``axis_dir``, ``translate``, ``displacements``, ``slide``, ``fixed``,
+    ``solver``, ``stiffness``, ``no_rotation``, ``tolerance``, ``allow_inverted``; not
+    ``geometry`` or ``progress``), with ``partition`` and ``coarse_parts`` (aggregates per rank
+    of the coarse-grid correction) of ``aeroshape deform`` under mpirun.
+
+    Returns a ``DistributedDeformation``: ``coordinates`` (the whole grid's new coordinates in
+    global-id order on rank 0, ``None`` elsewhere), ``local_coordinates``, ``global_ids`` and
+    ``n_owned`` of this rank's nodes, and ``report`` (the same on every rank). Raises
+    :class:`aeroshape.DeformError` (or ``ValueError`` for a bad argument) on every rank alike.
+    """
+    if not available():
+        raise ImportError(
+            "aeroshape was built without its cargo feature 'mpi': "
+            'MATURIN_PEP517_ARGS="--features mpi" pip install ./crates/aeroshape-py'
+        )
+    from mpi4py import MPI
+
+    size = comm.Get_size()
+    world = MPI.COMM_WORLD.Get_group()
+    group = comm.Get_group()
+    try:
+        ranks = MPI.Group.Translate_ranks(group, list(range(size)), world)
+    finally:
+        group.Free()
+        world.Free()
+    if any(r == MPI.UNDEFINED for r in ranks):
+        raise ValueError("comm: a process of the communicator is not in MPI.COMM_WORLD")
+    return _native.deform_distributed(
+        list(ranks), comm.Get_rank(), mesh, global_ids, n_owned, **keywords
+    )

@@ -1,0 +1,138 @@
+"""Run under ``mpirun -n N python mpi_deform.py GRID`` by ``test_distributed.py``: the
+distributed deformation through mpi4py against the serial ``aeroshape.deform`` on rank 0.
+
+1. The grid file on rank 0, partitioned by METIS; then the grid as a ``Mesh`` on rank 0,
+   partitioned by coordinate bisection. Motion and flags of ``cargo xtask regress``'s MPI
+   test (the wing and fuselage pitched 2°, the symmetry plane sliding).
+2. Each rank's own part, cut here by slabs of x (owned nodes, then the ghosts of the cells
+   around them, the boundary elements of its nodes), rigid and fixed markers only: the wing
+   and fuselage lifted by 0.05 (without the sliding plane, the pitch above inverts a cell
+   at the wing root even serially).
+3. Bad arguments on one rank only: every rank raises, nobody hangs.
+
+Rank 0 prints one ``result`` line per check and exits 1 when one failed (after every
+collective call, so no rank is left waiting); an unexpected exception aborts the job.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+from mpi4py import MPI
+
+import aeroshape
+from aeroshape import distributed
+
+REL = 1e-8
+KW = dict(rigid=["wing", "fuselage"], rotate_deg=2.0, axis_point=(5, 0, 0), axis_dir=(0, 1, 0),
+          tolerance=1e-11)
+
+
+def deviation(x, serial, x0):
+    return np.abs(np.linalg.norm(x - serial, axis=1)).max() / np.linalg.norm(serial - x0, axis=1).max()
+
+
+def part(mesh, rank, size):
+    """This rank's slab of x: owned nodes, ghosts, the cells with an owned node, the marker
+    elements whose nodes are all local; global ids are the grid's node indices."""
+    x = mesh.coordinates
+    cuts = np.quantile(x[:, 0], np.linspace(0, 1, size + 1)[1:-1])
+    owner = np.searchsorted(cuts, x[:, 0], side="right")
+    owned = np.flatnonzero(owner == rank)
+    cells = {}
+    touched = []
+    for kind, c in mesh.cells.items():
+        keep = c[(owner[c] == rank).any(axis=1)]
+        cells[kind] = keep
+        touched.append(keep.ravel())
+    ghosts = np.setdiff1d(np.unique(np.concatenate(touched)), owned)
+    gids = np.concatenate([owned, ghosts])
+    local = np.full(len(x), -1)
+    local[gids] = np.arange(len(gids))
+    markers = {}
+    for name, sets in mesh.markers.items():
+        markers[name] = {k: local[e[(local[e] >= 0).all(axis=1)]] for k, e in sets.items()}
+    m = aeroshape.Mesh(x[gids], {k: local[c] for k, c in cells.items()}, markers)
+    return m, gids, len(owned)
+
+
+def main() -> int:
+    comm = MPI.COMM_WORLD
+    rank, size = comm.Get_rank(), comm.Get_size()
+    grid = sys.argv[1]
+    mesh = aeroshape.read_mesh(grid)
+    x0 = mesh.coordinates
+    failed = []
+
+    def check(name, ok, text):
+        if rank == 0:
+            print(f"result {name}: {text}", flush=True)
+            if not ok:
+                failed.append(name)
+
+    # 1. The grid on rank 0: METIS from the file, bisection from a Mesh.
+    slide = dict(KW, slide=["symmetry"])
+    serial = aeroshape.deform(mesh, **slide).coordinates if rank == 0 else None
+    for name, arg, how in [("file-metis", grid, "metis"), ("mesh-rcb", mesh, "rcb")]:
+        d = distributed.deform(comm, arg if rank == 0 else None, partition=how, **slide)
+        r = d.report
+        if rank == 0:
+            dev = deviation(d.coordinates, serial, x0)
+            ok = dev <= REL and r["partitioner"] == how and r["ranks"] == size
+            check(name, ok, f"deviation {dev:.2e}, partitioner {r['partitioner']}, "
+                  f"{r['ghost_nodes']} ghost nodes, {r['iterations']} + {r['rotation_iterations']} iterations")
+        # every rank's own nodes at the gathered grid's positions
+        xs = comm.bcast(d.coordinates if rank == 0 else None)
+        local_ok = np.array_equal(d.local_coordinates[: d.n_owned], xs[d.global_ids[: d.n_owned]])
+        check(f"{name}-local", all(comm.allgather(local_ok)), "owned nodes as gathered")
+
+    # 2. Each rank's own part (rigid and fixed markers only).
+    lift = dict(rigid=["wing", "fuselage"], translate=(0, 0, 0.05), tolerance=1e-11)
+    serial = aeroshape.deform(mesh, **lift).coordinates if rank == 0 else None
+    m, gids, n_owned = part(mesh, rank, size)
+    d = distributed.deform(comm, m, global_ids=gids, n_owned=n_owned, **lift)
+    if rank == 0:
+        dev = deviation(d.coordinates, serial, x0)
+        check("given", dev <= REL and d.report["partitioner"] == "given",
+              f"deviation {dev:.2e}, {d.report['ghost_nodes']} ghost nodes")
+
+    # 3. Bad arguments on rank 0 alone: every rank raises.
+    raised = None
+    try:
+        distributed.deform(comm, grid if rank == 0 else None,
+                           partition="scotch" if rank == 0 else "metis", **KW)
+    except (ValueError, aeroshape.DeformError) as e:
+        raised = f"{type(e).__name__}: {e}"
+    got = comm.gather(raised)
+    if rank == 0:
+        ok = got[0].startswith("ValueError") and "scotch" in got[0] and all(
+            g and "another rank refused" in g for g in got[1:])
+        check("bad-argument", ok, " | ".join(map(str, got)))
+    raised = None
+    try:
+        if rank == 0:
+            distributed.deform(comm, m, global_ids=gids, n_owned=n_owned, **KW)
+        else:
+            distributed.deform(comm, None, **KW)
+    except (ValueError, aeroshape.DeformError) as e:
+        raised = f"{type(e).__name__}: {e}"
+    got = comm.gather(raised)
+    if rank == 0:
+        ok = all(g and "given on some ranks" in g for g in got)
+        check("mixed-ways", ok, " | ".join(map(str, got)))
+    if rank == 0 and failed:
+        print(f"failed: {', '.join(failed)}", flush=True)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    try:
+        code = main()
+    except BaseException:
+        import traceback
+
+        traceback.print_exc()
+        sys.stderr.flush()
+        MPI.COMM_WORLD.Abort(2)
+    sys.exit(code)
