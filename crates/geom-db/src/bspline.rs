@@ -253,6 +253,59 @@ impl KnotVector {
         (s, ders)
     }
 
+    /// The p + 1 nonzero basis functions at t into `n0` and their first derivatives into
+    /// `n1` (each at least p + 1 long); returns the span. The same arithmetic as
+    /// [`KnotVector::basis_ders`] with one derivative, so the same bits, without allocating
+    /// below degree 16 (the surface evaluations of the CAD import call it millions of times).
+    pub fn basis_ders1_into(&self, t: f64, n0: &mut [f64], n1: &mut [f64]) -> usize {
+        const N: usize = 16;
+        let p = self.degree;
+        if p >= N {
+            let (s, d) = self.basis_ders(t, 1);
+            n0[..=p].copy_from_slice(&d[0]);
+            n1[..=p].copy_from_slice(&d[1]);
+            return s;
+        }
+        let s = self.find_span(t);
+        let t = t.clamp(self.domain().0, self.domain().1);
+        let k = &self.knots;
+        let mut ndu = [[0.0; N]; N];
+        let (mut left, mut right) = ([0.0; N], [0.0; N]);
+        ndu[0][0] = 1.0;
+        for j in 1..=p {
+            left[j] = t - k[s + 1 - j];
+            right[j] = k[s + j] - t;
+            let mut saved = 0.0;
+            for r in 0..j {
+                ndu[j][r] = right[r + 1] + left[j - r];
+                let temp = ndu[r][j - 1] / ndu[j][r];
+                ndu[r][j] = saved + right[r + 1] * temp;
+                saved = left[j - r] * temp;
+            }
+            ndu[j][j] = saved;
+        }
+        for j in 0..=p {
+            n0[j] = ndu[j][p];
+            n1[j] = 0.0;
+        }
+        if p == 0 {
+            return s;
+        }
+        // N'_r = p (N_{r-1,p-1} / (t_{r+p} - t_r) - N_{r,p-1} / (t_{r+p+1} - t_{r+1})),
+        // the knot differences being ndu[p][·] (The NURBS Book, A2.3 with n = 1).
+        for r in 0..=p {
+            let mut d = 0.0;
+            if r >= 1 {
+                d = (1.0 / ndu[p][r - 1]) * ndu[r - 1][p - 1];
+            }
+            if r < p {
+                d += (-1.0 / ndu[p][r]) * ndu[r][p - 1];
+            }
+            n1[r] = d * p as f64;
+        }
+        s
+    }
+
     /// Evaluates a B-spline curve with control points of dimension D at t.
     pub fn curve_point<const D: usize>(&self, ctrl: &[[f64; D]], t: f64) -> [f64; D] {
         debug_assert_eq!(ctrl.len(), self.n_basis());
@@ -358,6 +411,25 @@ mod tests {
                 assert!((d[0][j] - f0[i]).abs() < 1e-14);
                 assert!((d[1][j] - d1).abs() < 1e-6 * (1.0 + d1.abs()), "{t} {j}");
                 assert!((d[2][j] - d2).abs() < 1e-2 * (1.0 + d2.abs()), "{t} {j}");
+            }
+        }
+    }
+
+    #[test]
+    fn first_derivative_fast_path_gives_the_bits_of_the_general_one() {
+        // Degrees 1 to 17 (beyond the stack path's 16), with a repeated interior knot.
+        for p in 1..=17 {
+            let mut knots = vec![0.0; p + 1];
+            knots.extend([0.1, 0.35, 0.35, 0.6, 0.9]);
+            knots.extend(vec![1.0; p + 1]);
+            let kv = KnotVector::new(p, knots).unwrap();
+            for i in 0..=40 {
+                let t = i as f64 / 40.0 + if i % 3 == 1 { 1e-3 } else { 0.0 };
+                let (s, d) = kv.basis_ders(t, 1);
+                let (mut n0, mut n1) = (vec![7.0; p + 1], vec![7.0; p + 1]);
+                assert_eq!(kv.basis_ders1_into(t, &mut n0, &mut n1), s);
+                assert_eq!(n0, d[0], "p = {p}, t = {t}");
+                assert_eq!(n1, d[1], "p = {p}, t = {t}");
             }
         }
     }

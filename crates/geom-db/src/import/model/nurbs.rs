@@ -202,54 +202,56 @@ impl NurbsSurface {
     /// S(u, v), S_u, S_v.
     pub fn derivs(&self, u: f64, v: f64) -> (Point3, Vector3, Vector3) {
         let (pu, pv) = (self.knots_u.degree(), self.knots_v.degree());
-        let (su, nu) = self.knots_u.basis_ders(u, 1);
-        let (sv, nv) = self.knots_v.basis_ders(v, 1);
         let n_u = self.knots_u.n_basis();
-        let (mut a, mut au, mut av) = ([0.0; 4], [0.0; 4], [0.0; 4]);
-        for b in 0..=pv {
-            let j = sv - pv + b;
-            for c in 0..=pu {
-                let i = su - pu + c;
-                let h = &self.ctrl[i + n_u * j];
-                let (n00, n10, n01) = (
-                    nu[0][c] * nv[0][b],
-                    nu[1][c] * nv[0][b],
-                    nu[0][c] * nv[1][b],
-                );
-                for k in 0..4 {
-                    a[k] += n00 * h[k];
-                    au[k] += n10 * h[k];
-                    av[k] += n01 * h[k];
+        with_scratch(pu + 1, |nu0, nu1| {
+            with_scratch(pv + 1, |nv0, nv1| {
+                let su = self.knots_u.basis_ders1_into(u, nu0, nu1);
+                let sv = self.knots_v.basis_ders1_into(v, nv0, nv1);
+                let (mut a, mut au, mut av) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+                for b in 0..=pv {
+                    let j = sv - pv + b;
+                    for c in 0..=pu {
+                        let i = su - pu + c;
+                        let h = &self.ctrl[i + n_u * j];
+                        let (n00, n10, n01) = (nu0[c] * nv0[b], nu1[c] * nv0[b], nu0[c] * nv1[b]);
+                        for k in 0..4 {
+                            a[k] += n00 * h[k];
+                            au[k] += n10 * h[k];
+                            av[k] += n01 * h[k];
+                        }
+                    }
                 }
-            }
-        }
-        let w = a[3];
-        let s = Vector3::new(a[0], a[1], a[2]) / w;
-        let du = (Vector3::new(au[0], au[1], au[2]) - s * au[3]) / w;
-        let dv = (Vector3::new(av[0], av[1], av[2]) - s * av[3]) / w;
-        (Point3::from(s), du, dv)
+                let w = a[3];
+                let s = Vector3::new(a[0], a[1], a[2]) / w;
+                let du = (Vector3::new(au[0], au[1], au[2]) - s * au[3]) / w;
+                let dv = (Vector3::new(av[0], av[1], av[2]) - s * av[3]) / w;
+                (Point3::from(s), du, dv)
+            })
+        })
     }
 
     /// S(u, v).
     pub fn point(&self, u: f64, v: f64) -> Point3 {
         let (pu, pv) = (self.knots_u.degree(), self.knots_v.degree());
-        let mut nu = vec![0.0; pu + 1];
-        let mut nv = vec![0.0; pv + 1];
-        let su = self.knots_u.basis_into(u, &mut nu);
-        let sv = self.knots_v.basis_into(v, &mut nv);
         let n_u = self.knots_u.n_basis();
-        let mut h = [0.0; 4];
-        for (b, &wv) in nv.iter().enumerate() {
-            let j = sv - pv + b;
-            for (c, &wu) in nu.iter().enumerate() {
-                let i = su - pu + c;
-                let p = &self.ctrl[i + n_u * j];
-                for k in 0..4 {
-                    h[k] += wu * wv * p[k];
+        with_scratch(pu + 1, |nu, _| {
+            with_scratch(pv + 1, |nv, _| {
+                let su = self.knots_u.basis_into(u, nu);
+                let sv = self.knots_v.basis_into(v, nv);
+                let mut h = [0.0; 4];
+                for (b, &wv) in nv.iter().enumerate() {
+                    let j = sv - pv + b;
+                    for (c, &wu) in nu.iter().enumerate() {
+                        let i = su - pu + c;
+                        let p = &self.ctrl[i + n_u * j];
+                        for k in 0..4 {
+                            h[k] += wu * wv * p[k];
+                        }
+                    }
                 }
-            }
-        }
-        Point3::new(h[0] / h[3], h[1] / h[3], h[2] / h[3])
+                Point3::new(h[0] / h[3], h[1] / h[3], h[2] / h[3])
+            })
+        })
     }
 
     /// Maps the control points.
@@ -285,5 +287,19 @@ mod tests {
             assert!((d - fd).norm() < 1e-6 * d.norm(), "{t}");
         }
         assert!(NurbsCurve::new(KnotVector::bezier(2), &pts, &[1.0, 0.0, 1.0]).is_err());
+    }
+}
+
+/// Runs `f` with two zeroed scratch slices of length `len`: on the stack up to order 16
+/// (every surface CAD kernels write), on the heap beyond. The surface evaluations of the
+/// import run millions of times, and allocating their basis arrays was a third of its time.
+fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f64], &mut [f64]) -> R) -> R {
+    const N: usize = 16;
+    if len <= N {
+        let (mut a, mut b) = ([0.0; N], [0.0; N]);
+        f(&mut a[..len], &mut b[..len])
+    } else {
+        let (mut a, mut b) = (vec![0.0; len], vec![0.0; len]);
+        f(&mut a, &mut b)
     }
 }

@@ -209,23 +209,29 @@ fn to_global(b: &[f64], x: f64, period: Option<f64>) -> f64 {
 /// each run's equally spaced samples, the path taken as the parabola through each three
 /// (fourth order), and over the straight segment (a pole's edge of the parameter domain)
 /// joining a run to the next where they do not meet.
-pub(crate) fn green_flux(faces: &faces::Faces, fi: usize, runs: &[Vec<(f64, f64)>]) -> f64 {
-    green(faces, fi, runs, |d| d.point.coords.dot(&d.du.cross(&d.dv)))
+///
+/// Returns the pair (flux, area): the same rule with the integrand |r_U × r_V| gives the
+/// area of the region the loop bounds (signed: positive counter-clockwise). Both come from
+/// one pass, since the surface derivatives dominate the cost.
+pub(crate) fn green_flux_area(
+    faces: &faces::Faces,
+    fi: usize,
+    runs: &[Vec<(f64, f64)>],
+) -> (f64, f64) {
+    green(faces, fi, runs, |d| {
+        let n = d.du.cross(&d.dv);
+        (d.point.coords.dot(&n), n.norm())
+    })
 }
 
-/// The area of the region a loop of face `fi` bounds (signed: positive counter-clockwise),
-/// by the same rule as [`green_flux`] with the integrand |r_U × r_V|.
-pub(crate) fn green_area(faces: &faces::Faces, fi: usize, runs: &[Vec<(f64, f64)>]) -> f64 {
-    green(faces, fi, runs, |d| d.du.cross(&d.dv).norm())
-}
-
-/// ∮ G dv with G = ∫ integrand dU (see [`green_flux`]).
+/// ∮ G dv with G = ∫ integrand dU, for a pair of integrands (see [`green_flux_area`]).
 fn green(
     faces: &faces::Faces,
     fi: usize,
     runs: &[Vec<(f64, f64)>],
-    integrand: impl Fn(&crate::eval::SurfaceDerivs) -> f64,
-) -> f64 {
+    integrand: impl Fn(&crate::eval::SurfaceDerivs) -> (f64, f64),
+) -> (f64, f64) {
+    type Pair = nalgebra::Vector2<f64>;
     const GAUSS: [(f64, f64); 4] = [
         (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
         (0.330_009_478_207_571_9, 0.326_072_577_431_273_07),
@@ -244,11 +250,12 @@ fn green(
         }
     };
     let f = |u: f64, v: f64| {
-        integrand(&crate::eval::ParamSurface::derivs(
+        let (a, b) = integrand(&crate::eval::ParamSurface::derivs(
             s,
             wrap(u, nu),
             wrap(v, nv),
-        ))
+        ));
+        Pair::new(a, b)
     };
     // ∫_0^U at fixed V, four Gauss intervals per patch width (the integrand has degree
     // ~3n in U); beyond the support's U range (a loop across a seam) periodically.
@@ -258,7 +265,7 @@ fn green(
         } else {
             (u, 0.0, -1.0)
         };
-        let mut acc = 0.0;
+        let mut acc = Pair::zeros();
         let mut a = from;
         while a < to {
             let b = ((a * 4.0).floor() / 4.0 + 0.25).min(to);
@@ -277,25 +284,25 @@ fn green(
         let j = (wrap(gv, nv).floor().max(0.0) as usize).min(vb.len() - 2);
         big_g(gu, gv) / (vb[j + 1] - vb[j])
     };
-    let simpson_run = |pts: &[(f64, f64)]| -> f64 {
-        let gs: Vec<f64> = pts.iter().map(|&q| g_exact(q)).collect();
-        let mut acc = 0.0;
+    let simpson_run = |pts: &[(f64, f64)]| -> Pair {
+        let gs: Vec<Pair> = pts.iter().map(|&q| g_exact(q)).collect();
+        let mut acc = Pair::zeros();
         let mut j = 0;
         while j + 2 < pts.len() {
             let (v0, v1, v2) = (pts[j].1, pts[j + 1].1, pts[j + 2].1);
             acc += (gs[j] * (-3.0 * v0 + 4.0 * v1 - v2)
-                + 4.0 * gs[j + 1] * (v2 - v0)
+                + gs[j + 1] * (4.0 * (v2 - v0))
                 + gs[j + 2] * (v0 - 4.0 * v1 + 3.0 * v2))
                 / 6.0;
             j += 2;
         }
         if j + 1 < pts.len() {
             // An odd run ends with one trapezoid.
-            acc += 0.5 * (gs[j] + gs[j + 1]) * (pts[j + 1].1 - pts[j].1);
+            acc += (gs[j] + gs[j + 1]) * (0.5 * (pts[j + 1].1 - pts[j].1));
         }
         acc
     };
-    let mut total = 0.0;
+    let mut total = Pair::zeros();
     for (i, run) in runs.iter().enumerate() {
         total += simpson_run(run);
         let next = &runs[(i + 1) % runs.len()];
@@ -312,7 +319,7 @@ fn green(
             total += simpson_run(&seg);
         }
     }
-    total
+    (total.x, total.y)
 }
 
 /// Twice the signed area of a polygon, halved.

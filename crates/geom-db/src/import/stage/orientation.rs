@@ -19,6 +19,7 @@ use super::faces::Faces;
 use super::sewing::Sewn;
 use super::{loop_polygon, shoelace};
 use crate::topology::Orientation;
+use rayon::prelude::*;
 
 /// What stage 7 produces.
 pub(crate) struct Oriented {
@@ -50,13 +51,15 @@ pub(crate) fn flip_face(inward: &mut Orientation, loops: &mut [Vec<(usize, bool)
 pub(crate) fn run(model: &CadModel, faces: &Faces, edges: &Edges, sewn: &Sewn) -> Oriented {
     let nf = model.faces.len();
     let mut loops = sewn.loops.clone();
-    let mut inward = Vec::with_capacity(nf);
-    for fi in 0..nf {
-        let sign = match model.faces[fi].same_sense {
+    // Per face on its own, in parallel (a face without a sense from the file needs its outer
+    // loop's exact parameters, which is much of the import's time).
+    let mut inward: Vec<Orientation> = (0..nf)
+        .into_par_iter()
+        .map(|fi| match model.faces[fi].same_sense {
             Some(true) => Orientation::Positive,
             Some(false) => Orientation::Negative,
             None => {
-                let poly = loop_polygon(model, faces, fi, &loops[fi][0], sewn, edges);
+                let poly = loop_polygon(model, faces, fi, &sewn.loops[fi][0], sewn, edges);
                 let flat: Vec<(f64, f64)> = poly.into_iter().flatten().collect();
                 if shoelace(&flat) >= 0.0 {
                     Orientation::Positive
@@ -64,9 +67,8 @@ pub(crate) fn run(model: &CadModel, faces: &Faces, edges: &Edges, sewn: &Sewn) -
                     Orientation::Negative
                 }
             }
-        };
-        inward.push(sign);
-    }
+        })
+        .collect();
     // Breadth-first consistency over edges shared by exactly two faces.
     let mut adj: Vec<Vec<(usize, bool)>> = vec![Vec::new(); nf];
     for s in &sewn.edges {

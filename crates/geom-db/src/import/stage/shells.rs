@@ -13,8 +13,9 @@ use super::edges::Edges;
 use super::faces::Faces;
 use super::orientation::{Oriented, flip_face};
 use super::sewing::Sewn;
-use super::{green_area, green_flux, loop_polygon};
+use super::{green_flux_area, loop_polygon};
 use crate::prelude::Point3;
+use rayon::prelude::*;
 
 /// What stage 8 produces.
 pub(crate) struct Shells {
@@ -42,12 +43,28 @@ pub(crate) fn run(
     let mut areas = vec![0.0; oriented.loops.len()];
     let inf = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
     let mut boxes = vec![(inf, -inf); n];
+    // Each loop's (flux, area) on its own, in parallel (the surface integrals are most of
+    // the import's time); summed below in loop order, so the result does not depend on the
+    // number of threads.
+    let integrals: Vec<Vec<(f64, f64)>> = oriented
+        .loops
+        .par_iter()
+        .enumerate()
+        .map(|(fi, loops)| {
+            loops
+                .iter()
+                .map(|lp| {
+                    let poly = loop_polygon(model, faces, fi, lp, sewn, edges);
+                    green_flux_area(faces, fi, &poly)
+                })
+                .collect()
+        })
+        .collect();
     for (fi, loops) in oriented.loops.iter().enumerate() {
         let sh = oriented.shell_of[fi];
-        for lp in loops {
-            let poly = loop_polygon(model, faces, fi, lp, sewn, edges);
-            volumes[sh] += green_flux(faces, fi, &poly) / 3.0;
-            areas[fi] += green_area(faces, fi, &poly) * oriented.inward[fi].sign();
+        for (lp, &(flux, area)) in loops.iter().zip(&integrals[fi]) {
+            volumes[sh] += flux / 3.0;
+            areas[fi] += area * oriented.inward[fi].sign();
             for &(s, _) in lp {
                 let (a, b) = sewn.edges[s].corners;
                 for p in [corners.points[a.index()], corners.points[b.index()]] {
