@@ -204,8 +204,9 @@ fn to_global(b: &[f64], x: f64, period: Option<f64>) -> f64 {
 ///
 /// The integrand is the face's support surface (within the tolerance of the exact one) in
 /// the support's global parameters (U, V), which map to (u, v) linearly on each patch:
-/// G(u, v) = (dV/dv) ∫_0^U x·(r_U × r_V) dU'. ∫ dU' is 4-point Gauss–Legendre on quarter
-/// patches (continued periodically across a seam); ∮ dv is composite Simpson's rule over
+/// G(u, v) = (dV/dv) ∫_0^U x·(r_U × r_V) dU'. ∫ dU' is Gauss–Legendre on each patch, with
+/// ⌈3p/2⌉ + 1 points for a patch of degree p in U, exact for the flux (continued
+/// periodically across a seam); ∮ dv is composite Simpson's rule over
 /// each run's equally spaced samples, the path taken as the parabola through each three
 /// (fourth order), and over the straight segment (a pole's edge of the parameter domain)
 /// joining a run to the next where they do not meet.
@@ -232,12 +233,6 @@ fn green(
     integrand: impl Fn(&crate::eval::SurfaceDerivs) -> (f64, f64),
 ) -> (f64, f64) {
     type Pair = nalgebra::Vector2<f64>;
-    const GAUSS: [(f64, f64); 4] = [
-        (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
-        (0.330_009_478_207_571_9, 0.326_072_577_431_273_07),
-        (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
-        (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
-    ];
     let g_face = &faces.faces[fi];
     let sup = &faces.supports[g_face.support];
     let s = &sup.surface;
@@ -257,24 +252,39 @@ fn green(
         ));
         Pair::new(a, b)
     };
-    // ∫_0^U at fixed V, four Gauss intervals per patch width (the integrand has degree
-    // ~3n in U); beyond the support's U range (a loop across a seam) periodically.
+    // The Gauss–Legendre rule of each patch degree in U: x·(r_U × r_V) has degree 3p − 1 in
+    // U on a patch of degree p, which ⌈3p/2⌉ points integrate exactly; one more for the
+    // area's |r_U × r_V|, which is not a polynomial.
+    let mut rules: Vec<Vec<(f64, f64)>> = Vec::new();
+    for patch in &s.patches {
+        if rules.len() <= patch.deg_u {
+            rules.resize(patch.deg_u + 1, Vec::new());
+        }
+        if rules[patch.deg_u].is_empty() {
+            rules[patch.deg_u] = gauss_legendre((3 * patch.deg_u).div_ceil(2).max(1) + 1);
+        }
+    }
+    let cell = |x: f64, n: usize| (x.floor().max(0.0) as usize).min(n - 1);
+    // ∫_0^U at fixed V, patch by patch (continued periodically across a seam beyond the
+    // support's U range).
     let big_g = |u: f64, v: f64| {
         let (from, to, sign) = if u >= 0.0 {
             (0.0, u, 1.0)
         } else {
             (u, 0.0, -1.0)
         };
+        let j = cell(wrap(v, nv), s.n_v);
         let mut acc = Pair::zeros();
         let mut a = from;
         while a < to {
-            let b = ((a * 4.0).floor() / 4.0 + 0.25).min(to);
-            for &(x, w) in &GAUSS {
-                acc += w * (b - a) * f(a + x * (b - a), v);
+            let b = (a.floor() + 1.0).min(to);
+            let i = cell(wrap(0.5 * (a + b), nu), s.n_u);
+            for &(x, w) in &rules[s.patch(i, j).deg_u] {
+                acc += f(a + x * (b - a), v) * (w * (b - a));
             }
             a = b;
         }
-        sign * acc
+        acc * sign
     };
     let (pu, pv) = (g_face.domain.u_period, g_face.domain.v_period);
     let vb = &sup.v_breaks;
@@ -332,4 +342,57 @@ pub(crate) fn shoelace(poly: &[(f64, f64)]) -> f64 {
         })
         .sum::<f64>()
         * 0.5
+}
+
+/// The m-point Gauss–Legendre rule on [0, 1]: (node, weight) pairs, nodes ascending. The
+/// nodes are the roots of the Legendre polynomial P_m, found by Newton's method from
+/// Tricomi's estimate cos(π (i + 3/4) / (m + 1/2)); exact for polynomials of degree 2m − 1.
+fn gauss_legendre(m: usize) -> Vec<(f64, f64)> {
+    (0..m)
+        .map(|i| {
+            let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (m as f64 + 0.5)).cos();
+            let mut dp = 1.0;
+            for _ in 0..100 {
+                // P_m(x) and P_{m-1}(x) by the three-term recurrence.
+                let (mut p0, mut p1) = (1.0, x);
+                for k in 2..=m {
+                    let k = k as f64;
+                    (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
+                }
+                dp = m as f64 * (x * p1 - p0) / (x * x - 1.0);
+                let dx = p1 / dp;
+                x -= dx;
+                if dx.abs() <= 1e-15 {
+                    break;
+                }
+            }
+            ((1.0 - x) / 2.0, 1.0 / ((1.0 - x * x) * dp * dp))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::gauss_legendre;
+
+    #[test]
+    fn gauss_legendre_integrates_its_degree_exactly_and_no_more() {
+        for m in 1..=20 {
+            let rule = gauss_legendre(m);
+            assert!(rule.windows(2).all(|w| w[0].0 < w[1].0), "m = {m}");
+            // ∫_0^1 x^k dx = 1 / (k + 1) for k ≤ 2m − 1.
+            for k in 0..2 * m {
+                let q: f64 = rule.iter().map(|&(x, w)| w * x.powi(k as i32)).sum();
+                assert!(
+                    (q - 1.0 / (k as f64 + 1.0)).abs() < 1e-14,
+                    "m = {m}, x^{k}: {q}"
+                );
+            }
+            // Degree 2m is not exact: the rule is Gauss's, not a wider one (its error
+            // falls below round-off beyond m = 8).
+            let k = 2 * m as i32;
+            let q: f64 = rule.iter().map(|&(x, w)| w * x.powi(k)).sum();
+            assert!(m > 8 || (q - 1.0 / (k as f64 + 1.0)).abs() > 1e-12, "m = {m}");
+        }
+    }
 }
