@@ -185,29 +185,40 @@ impl KnotVector {
         all
     }
 
-    /// Basis functions and their derivatives up to order `n_ders` at t (A2.3):
-    /// returns the span s and `ders[k][j]` = d^k N_{s-p+j} / dt^k.
-    pub fn basis_ders(&self, t: f64, n_ders: usize) -> (usize, Vec<Vec<f64>>) {
+    /// The table of The NURBS Book's A2.2 at t into `ndu` ((p + 1)² long, row-major:
+    /// ndu[j][r] at j (p + 1) + r): the basis functions of every degree up to p above its
+    /// diagonal and the knot differences below it, as A2.3 uses them. `left` and `right` are
+    /// scratch, p + 1 long. Returns the span.
+    fn ndu_table(&self, t: f64, ndu: &mut [f64], left: &mut [f64], right: &mut [f64]) -> usize {
         let p = self.degree;
+        let w = p + 1;
         let s = self.find_span(t);
         let t = t.clamp(self.domain().0, self.domain().1);
         let k = &self.knots;
-        let mut ndu = vec![vec![0.0; p + 1]; p + 1];
-        let mut left = vec![0.0; p + 1];
-        let mut right = vec![0.0; p + 1];
-        ndu[0][0] = 1.0;
+        ndu[0] = 1.0;
         for j in 1..=p {
             left[j] = t - k[s + 1 - j];
             right[j] = k[s + j] - t;
             let mut saved = 0.0;
             for r in 0..j {
-                ndu[j][r] = right[r + 1] + left[j - r];
-                let temp = ndu[r][j - 1] / ndu[j][r];
-                ndu[r][j] = saved + right[r + 1] * temp;
+                ndu[j * w + r] = right[r + 1] + left[j - r];
+                let temp = ndu[r * w + j - 1] / ndu[j * w + r];
+                ndu[r * w + j] = saved + right[r + 1] * temp;
                 saved = left[j - r] * temp;
             }
-            ndu[j][j] = saved;
+            ndu[j * w + j] = saved;
         }
+        s
+    }
+
+    /// Basis functions and their derivatives up to order `n_ders` at t (A2.3):
+    /// returns the span s and `ders[k][j]` = d^k N_{s-p+j} / dt^k.
+    pub fn basis_ders(&self, t: f64, n_ders: usize) -> (usize, Vec<Vec<f64>>) {
+        let p = self.degree;
+        let w = p + 1;
+        let (mut ndu, mut left, mut right) = (vec![0.0; w * w], vec![0.0; w], vec![0.0; w]);
+        let s = self.ndu_table(t, &mut ndu, &mut left, &mut right);
+        let ndu: Vec<&[f64]> = ndu.chunks(w).collect();
         let mut ders = vec![vec![0.0; p + 1]; n_ders + 1];
         for j in 0..=p {
             ders[0][j] = ndu[j][p];
@@ -266,40 +277,26 @@ impl KnotVector {
             n1[..=p].copy_from_slice(&d[1]);
             return s;
         }
-        let s = self.find_span(t);
-        let t = t.clamp(self.domain().0, self.domain().1);
-        let k = &self.knots;
-        let mut ndu = [[0.0; N]; N];
-        let (mut left, mut right) = ([0.0; N], [0.0; N]);
-        ndu[0][0] = 1.0;
-        for j in 1..=p {
-            left[j] = t - k[s + 1 - j];
-            right[j] = k[s + j] - t;
-            let mut saved = 0.0;
-            for r in 0..j {
-                ndu[j][r] = right[r + 1] + left[j - r];
-                let temp = ndu[r][j - 1] / ndu[j][r];
-                ndu[r][j] = saved + right[r + 1] * temp;
-                saved = left[j - r] * temp;
-            }
-            ndu[j][j] = saved;
-        }
+        let w = p + 1;
+        let (mut table, mut left, mut right) = ([0.0; N * N], [0.0; N], [0.0; N]);
+        let s = self.ndu_table(t, &mut table[..w * w], &mut left, &mut right);
+        let ndu = |j: usize, r: usize| table[j * w + r];
         for j in 0..=p {
-            n0[j] = ndu[j][p];
+            n0[j] = ndu(j, p);
             n1[j] = 0.0;
         }
         if p == 0 {
             return s;
         }
         // N'_r = p (N_{r-1,p-1} / (t_{r+p} - t_r) - N_{r,p-1} / (t_{r+p+1} - t_{r+1})),
-        // the knot differences being ndu[p][·] (The NURBS Book, A2.3 with n = 1).
+        // the knot differences being ndu(p, ·) (The NURBS Book, A2.3 with n = 1).
         for r in 0..=p {
             let mut d = 0.0;
             if r >= 1 {
-                d = (1.0 / ndu[p][r - 1]) * ndu[r - 1][p - 1];
+                d = (1.0 / ndu(p, r - 1)) * ndu(r - 1, p - 1);
             }
             if r < p {
-                d += (-1.0 / ndu[p][r]) * ndu[r][p - 1];
+                d += (-1.0 / ndu(p, r)) * ndu(r, p - 1);
             }
             n1[r] = d * p as f64;
         }

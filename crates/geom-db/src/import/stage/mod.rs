@@ -392,7 +392,10 @@ mod tests {
             // falls below round-off beyond m = 8).
             let k = 2 * m as i32;
             let q: f64 = rule.iter().map(|&(x, w)| w * x.powi(k)).sum();
-            assert!(m > 8 || (q - 1.0 / (k as f64 + 1.0)).abs() > 1e-12, "m = {m}");
+            assert!(
+                m > 8 || (q - 1.0 / (k as f64 + 1.0)).abs() > 1e-12,
+                "m = {m}"
+            );
         }
     }
 }
