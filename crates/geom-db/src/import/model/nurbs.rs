@@ -262,6 +262,20 @@ impl NurbsSurface {
     }
 }
 
+/// Runs `f` with two zeroed scratch slices of length `len`: on the stack up to order 16
+/// (every surface CAD kernels write), on the heap beyond. The surface evaluations of the
+/// import run millions of times, and allocating their basis arrays was a third of its time.
+fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f64], &mut [f64]) -> R) -> R {
+    const N: usize = 16;
+    if len <= N {
+        let (mut a, mut b) = ([0.0; N], [0.0; N]);
+        f(&mut a[..len], &mut b[..len])
+    } else {
+        let (mut a, mut b) = (vec![0.0; len], vec![0.0; len]);
+        f(&mut a, &mut b)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -287,19 +301,5 @@ mod tests {
             assert!((d - fd).norm() < 1e-6 * d.norm(), "{t}");
         }
         assert!(NurbsCurve::new(KnotVector::bezier(2), &pts, &[1.0, 0.0, 1.0]).is_err());
-    }
-}
-
-/// Runs `f` with two zeroed scratch slices of length `len`: on the stack up to order 16
-/// (every surface CAD kernels write), on the heap beyond. The surface evaluations of the
-/// import run millions of times, and allocating their basis arrays was a third of its time.
-fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f64], &mut [f64]) -> R) -> R {
-    const N: usize = 16;
-    if len <= N {
-        let (mut a, mut b) = ([0.0; N], [0.0; N]);
-        f(&mut a[..len], &mut b[..len])
-    } else {
-        let (mut a, mut b) = (vec![0.0; len], vec![0.0; len]);
-        f(&mut a, &mut b)
     }
 }
