@@ -192,6 +192,13 @@ fn convert(
             };
         }
     }
+    if !err.is_finite() || (method == "exact" && err > tol) {
+        // Exact arcs cannot be off, nor fitted ones infinitely, but for a corrupt entity
+        // (an overflowing coordinate, a NaN weight).
+        return Err(bad(format!(
+            "its {method} arcs are {err:.3e} from the curve (tolerance {tol:.3e})"
+        )));
+    }
     let arcs: Vec<Arc> = pieces.into_iter().map(|x| x.2).collect();
     Ok((
         arcs.clone(),

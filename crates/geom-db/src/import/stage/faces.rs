@@ -485,6 +485,18 @@ fn convert(
             v_breaks: vb[j0..=j1].to_vec(),
         };
         let err = sampled_error(s, &sup);
+        if !(err <= tol) {
+            // An exact conversion cannot be off but for a corrupt entity (an overflowing
+            // coordinate, a NaN weight).
+            return Err(face_err(
+                model,
+                fi,
+                format!(
+                    "surface {}: its exact patches are {err:.3e} from it (tolerance {tol:.3e})",
+                    ms.source.describe()
+                ),
+            ));
+        }
         let c = conv("exact", sup.surface.patches.len(), err);
         return Ok((sup, c));
     }
