@@ -9,7 +9,9 @@
 //!    on rank 0 by METIS, which the report must name); every node of the gathered grid
 //!    within 1e-8 of the serial one, relative to the largest displacement, and no cell with
 //!    q ≤ 0. The `.pvtu` run (-n 3) cuts by coordinate bisection (`--partition rcb`).
-//! 3. The partition given by the caller (`distributed` example, 3 ranks) against the serial
+//! 3. `mpirun aeroshape run` on the default case against the serial run
+//!    (`regress_mpi_study`).
+//! 4. The partition given by the caller (`distributed` example, 3 ranks) against the serial
 //!    result, and two bad partitions (a missing ghost, a global id owned twice): exit status
 //!    1 with the error on every rank, within a time limit (a hang fails).
 
@@ -36,7 +38,7 @@ const FLAGS: &[&str] = &[
 ];
 
 /// Relative deviation allowed from the serial result.
-const REL: f64 = 1e-8;
+pub(crate) const REL: f64 = 1e-8;
 
 fn have(cmd: &str) -> bool {
     Command::new(cmd)
@@ -46,7 +48,7 @@ fn have(cmd: &str) -> bool {
 }
 
 /// `mpirun` with the flags CI needs (root, more ranks than cores), under a time limit.
-fn mpirun(n: usize, prog: &Path, args: &[&str]) -> Result<Output, String> {
+pub(crate) fn mpirun(n: usize, prog: &Path, args: &[&str]) -> Result<Output, String> {
     let mut c = Command::new("timeout");
     c.arg("600").arg("mpirun");
     if std::env::var("USER").is_ok_and(|u| u == "root") || is_root() {
@@ -68,7 +70,7 @@ fn is_root() -> bool {
 }
 
 /// Node coordinates of an SU2 grid (the `NPOIN` section).
-fn su2_points(path: &Path) -> Result<Vec<[f64; 3]>, String> {
+pub(crate) fn su2_points(path: &Path) -> Result<Vec<[f64; 3]>, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let mut lines = text.lines();
     let bad = || format!("{}: malformed NPOIN section", path.display());
@@ -102,7 +104,7 @@ fn su2_points(path: &Path) -> Result<Vec<[f64; 3]>, String> {
 
 /// Largest node deviation of `a` from `b`, relative to the largest displacement of `b`
 /// from `x0`.
-fn deviation(x0: &[[f64; 3]], a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+pub(crate) fn deviation(x0: &[[f64; 3]], a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
     let d = |p: &[f64; 3], q: &[f64; 3]| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
     let dev = a.iter().zip(b).map(|(p, q)| d(p, q)).fold(0.0, f64::max);
     let disp = b.iter().zip(x0).map(|(p, q)| d(p, q)).fold(0.0, f64::max);
@@ -316,6 +318,7 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
         }
     }
     pieces(&bin, &g, &grid, &serial, &out, drift)?;
+    crate::regress_mpi_study::run(root, &bin, drift)?;
     let ex = root.join("target/release/examples/distributed");
     let res = mpirun(3, &ex, &["24", "ok"])?;
     print!("{}", String::from_utf8_lossy(&res.stdout));

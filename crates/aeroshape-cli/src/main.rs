@@ -25,6 +25,8 @@ mod case;
 mod deform;
 #[cfg(feature = "mpi")]
 mod deform_mpi;
+#[cfg(feature = "mpi")]
+mod run_mpi;
 mod geom;
 mod geom_import;
 mod gradient;

@@ -67,6 +67,10 @@ pub(crate) fn wing_surfaces(db: &GeomDb) -> Vec<SurfaceId> {
 
 /// Runs `aeroshape run`.
 pub fn run(a: RunArgs) -> anyhow::Result<()> {
+    #[cfg(feature = "mpi")]
+    if crate::deform_mpi::launched() {
+        return crate::run_mpi::run(a);
+    }
     let t0 = Instant::now();
     let mut case = Case::load(&a.case)?;
     if let Some(l) = a.rotation_reach {
@@ -144,7 +148,8 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     })?;
     put("geometry.ron", &|w| ev.geometry.write_ron(w))?;
     if !a.no_pictures {
-        pictures(&study, &ev, &a.output, &mut written)?;
+        let before = (study.geometry(), study.baseline_quality());
+        pictures(before, (&ev.geometry, &ev.cell_quality), &a.output, &mut written)?;
     }
     let report_path = out("report.json");
     written.push(report_path.display().to_string());
@@ -204,18 +209,18 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
 /// The PNG pictures: quality histogram before/after, wing planform and key sections
 /// before/after (the wing: components whose name starts with "wing"; sections at 20 %, 50 %
 /// and 98 % of its span).
-fn pictures(
-    study: &Study,
-    ev: &aeroshape::Evaluation,
+pub(crate) fn pictures(
+    (baseline, quality_before): (&GeomDb, &[f64]),
+    (geometry, quality_after): (&GeomDb, &[f64]),
     dir: &Path,
     written: &mut Vec<String>,
 ) -> anyhow::Result<()> {
     let out = |name: &str| dir.join(name);
-    let wings = wing_surfaces(study.geometry());
+    let wings = wing_surfaces(baseline);
     crate::pictures::quality_histogram(
         &out("quality.png"),
-        study.baseline_quality(),
-        &ev.cell_quality,
+        quality_before,
+        quality_after,
         "grid quality",
     )
     .map_err(anyhow::Error::msg)?;
@@ -223,18 +228,18 @@ fn pictures(
     if !wings.is_empty() {
         crate::pictures::wing_planform(
             &out("planform.png"),
-            study.geometry(),
-            &ev.geometry,
+            baseline,
+            geometry,
             &wings,
         )
         .map_err(anyhow::Error::msg)?;
         written.push(out("planform.png").display().to_string());
-        let (lo, hi) = span_range(study.geometry(), &wings);
+        let (lo, hi) = span_range(baseline, &wings);
         let stations = [lo + 0.2 * (hi - lo), 0.5 * (lo + hi), hi - 0.02 * (hi - lo)];
         crate::pictures::wing_sections(
             &out("sections.png"),
-            study.geometry(),
-            &ev.geometry,
+            baseline,
+            geometry,
             &wings,
             &stations,
         )

@@ -117,6 +117,15 @@ pub enum StudyError {
     /// The volume deformation of an evaluation failed.
     #[error("deform: {0}")]
     Deform(#[from] deform::Error),
+    /// Another rank of a distributed study (feature `mpi`) failed: its error's text, so
+    /// every rank reports the same line.
+    #[error("{reason}")]
+    Distributed {
+        /// The rank that failed.
+        rank: i32,
+        /// Its error.
+        reason: String,
+    },
     /// A vector given to a product of the linearised chain has the wrong length.
     #[error("{what}: {found} values, expected {expected}")]
     ProductLength {

@@ -60,6 +60,8 @@ use surfgrid::SurfaceGrid;
 
 use crate::case::Case;
 
+#[cfg(feature = "mpi")]
+pub mod distributed;
 pub mod error;
 mod evaluate;
 pub mod linearise;

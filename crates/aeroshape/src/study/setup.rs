@@ -91,7 +91,7 @@ fn read_inputs(case: &Case, case_path: &Path) -> Result<Inputs> {
 ///
 /// A design variable that moves no control node is an error naming it
 /// ([`crate::reach::check_live`]).
-fn bind_parametrisation(case: &Case, case_path: &Path, db: &GeomDb) -> Result<Prepared> {
+pub(super) fn bind_parametrisation(case: &Case, case_path: &Path, db: &GeomDb) -> Result<Prepared> {
     let masters = if case.wing_masters.is_empty() {
         MasterSources::new()
     } else {
@@ -163,6 +163,15 @@ fn deform_bc(case: &Case, wall: &Wall) -> deform::BoundaryConditions {
         .map(|(i, _)| (i as u32, [0.0; 3]))
         .collect();
     displacements.extend(wall.fixed_nodes.iter().map(|&v| (v, [0.0; 3])));
+    deform_markers(case, displacements)
+}
+
+/// The boundary conditions of [`deform_bc`] with the given prescribed displacements: the
+/// case's `slide` markers sliding on their plane, its `fixed` markers held.
+pub(super) fn deform_markers(
+    case: &Case,
+    displacements: Vec<(u32, [f64; 3])>,
+) -> deform::BoundaryConditions {
     deform::BoundaryConditions {
         markers: case
             .slide

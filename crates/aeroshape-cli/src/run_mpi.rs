@@ -1,0 +1,235 @@
+//! `mpirun -n N aeroshape run CASE.ron [--dv DV.ron] -o OUTDIR` (cargo feature `mpi`): the
+//! flags of the serial command; the study over the ranks
+//! ([`aeroshape::study::distributed::DistributedStudy`]): the geometry phases on every rank,
+//! the grid read on rank 0, the deformation distributed and gathered on rank 0, which writes
+//! the serial command's files (`report.json` with the distributed deformation's report under
+//! `distributed`). Every rank reports an error, and exits 1, alike.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use deform::distributed::{DistReport, all_ok, mpi};
+use mpi::collective::SystemOperation;
+use mpi::traits::*;
+use mesh::io::Format;
+use mesh::msh::Encoding;
+use serde::Serialize;
+
+use aeroshape::case::{Case, load_design_values};
+use aeroshape::fsio::{ensure_not_input, write_atomic};
+use aeroshape::study::distributed::DistributedStudy;
+use aeroshape::study::{Report, SetupReport};
+
+use crate::run::RunArgs;
+
+/// The file `report.json` of a distributed run: the serial one's fields and the distributed
+/// deformation's report.
+#[derive(Serialize)]
+struct RunReport<'a> {
+    case: String,
+    design_vector: Option<String>,
+    ranks: i32,
+    setup: &'a SetupReport,
+    evaluation: &'a Report,
+    /// `None` when no wall node moved (the deformation was skipped).
+    distributed: Option<&'a DistReport>,
+    outputs: Vec<String>,
+}
+
+/// Runs `aeroshape run` on the world communicator of an MPI job.
+pub fn run(a: RunArgs) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let universe = mpi::initialize().context("MPI could not be initialised")?;
+    let world = universe.world();
+    let root = world.rank() == 0;
+    let mut case = Case::load(&a.case)?;
+    if let Some(l) = a.rotation_reach {
+        case.deform.rotation_reach = Some(l);
+    }
+    let mut inputs: Vec<PathBuf> = vec![a.case.clone(), case.geometry_path(&a.case)];
+    inputs.extend(case.grid_path(&a.case));
+    inputs.extend(a.dv.clone());
+    let out = |name: &str| a.output.join(name);
+    let input_refs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    for n in [
+        "deformed.su2",
+        "deformed.msh",
+        "deformed.vtu",
+        "baseline.su2",
+        "geometry.ron",
+        "report.json",
+        "planform.png",
+        "sections.png",
+        "quality.png",
+    ] {
+        ensure_not_input(&out(n), &input_refs).map_err(anyhow::Error::msg)?;
+    }
+    let made = if root {
+        std::fs::create_dir_all(&a.output)
+            .with_context(|| format!("{}: cannot create the output folder", a.output.display()))
+    } else {
+        Ok(())
+    };
+    agree(&world, made, &a.output)?;
+    if root {
+        eprintln!(
+            "[run] building the study from {} on {} ranks",
+            a.case.display(),
+            world.size()
+        );
+    }
+    let study = DistributedStudy::new(&world, case, &a.case)?;
+    let x = match &a.dv {
+        Some(p) => load_design_values(p).map_err(anyhow::Error::from).and_then(|v| {
+            study
+                .vector_from_values(&v)
+                .with_context(|| p.display().to_string())
+        }),
+        None => Ok(study.initial()),
+    };
+    // The same files on every rank: the same outcome.
+    let x = agree(&world, x, &a.case)?;
+    let feasible = super::param::check_constraints(
+        &study.case().parametrisation,
+        &x,
+        &a.case,
+        a.allow_infeasible,
+        "run",
+    );
+    agree(&world, feasible, &a.case)?;
+    let ev = study.evaluate(&x, &mut |p| {
+        if root {
+            eprintln!("[run] {p}");
+        }
+    })?;
+    let written = match (&ev.root, study.baseline(), study.baseline_quality()) {
+        (Some(r), Some(baseline), Some(q0)) => {
+            write(&a, &study, &ev, r, (baseline, q0), world.size(), t0)
+        }
+        _ => Ok(()),
+    };
+    agree(&world, written, &a.output)
+}
+
+/// `local` on every rank when it is `Ok` everywhere; otherwise the error of the lowest
+/// failing rank on every rank, with the same text (collective).
+fn agree<T>(
+    world: &deform::distributed::Comm,
+    local: anyhow::Result<T>,
+    subject: &Path,
+) -> anyhow::Result<T> {
+    if all_ok(world, local.is_ok()) {
+        return local;
+    }
+    let me = world.rank();
+    let mine = if local.is_err() { me } else { i32::MAX };
+    let mut first = i32::MAX;
+    world.all_reduce_into(&mine, &mut first, SystemOperation::min());
+    let mut text = match &local {
+        Err(e) if me == first => format!("{e:#}").into_bytes(),
+        _ => Vec::new(),
+    };
+    let mut len = text.len() as u64;
+    let from = world.process_at_rank(first);
+    from.broadcast_into(&mut len);
+    text.resize(len as usize, 0);
+    from.broadcast_into(&mut text[..]);
+    local?;
+    let text = String::from_utf8_lossy(&text);
+    bail!("{text} (rank {first}; {})", subject.display())
+}
+
+/// Rank 0's files: the serial command's.
+fn write(
+    a: &RunArgs,
+    study: &DistributedStudy<'_>,
+    ev: &aeroshape::study::distributed::DistEvaluation,
+    r: &aeroshape::study::distributed::RootEvaluation,
+    (baseline, q0): (&mesh::Mesh, &[f64]),
+    ranks: i32,
+    t0: Instant,
+) -> anyhow::Result<()> {
+    let out = |name: &str| a.output.join(name);
+    let rep = &r.report;
+    eprintln!(
+        "[run] writing {} (evaluation {:.2} s)",
+        a.output.display(),
+        rep.seconds
+    );
+    let mut written = Vec::new();
+    let mut put = |name: &str, f: &dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()>| {
+        let p = out(name);
+        write_atomic(&p, |w| f(w))?;
+        written.push(p.display().to_string());
+        anyhow::Ok(())
+    };
+    put("deformed.su2", &|w| mesh::io::write(&r.grid, Format::Su2, w))?;
+    put("deformed.msh", &|w| {
+        mesh::io::write(&r.grid, Format::Msh(Encoding::Ascii), w)
+    })?;
+    put("deformed.vtu", &|w| {
+        mesh::io::write(
+            &r.grid,
+            Format::from_path(Path::new("a.vtu")).expect("vtu"),
+            w,
+        )
+    })?;
+    put("baseline.su2", &|w| mesh::io::write(baseline, Format::Su2, w))?;
+    put("geometry.ron", &|w| ev.geometry.write_ron(w))?;
+    if !a.no_pictures {
+        super::run::pictures(
+            (study.geometry(), q0),
+            (&ev.geometry, &r.cell_quality),
+            &a.output,
+            &mut written,
+        )?;
+    }
+    let report_path = out("report.json");
+    written.push(report_path.display().to_string());
+    let rr = RunReport {
+        case: a.case.display().to_string(),
+        design_vector: a.dv.as_ref().map(|p| p.display().to_string()),
+        ranks,
+        setup: study.setup_report(),
+        evaluation: rep,
+        distributed: ev.distributed.as_ref(),
+        outputs: written.clone(),
+    };
+    write_atomic(&report_path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &rr).map_err(std::io::Error::other)?;
+        writeln!(w)
+    })?;
+    match &ev.distributed {
+        Some(d) => outln!(
+            "param {:.3} s; model update {:.3} s (control-point residual {:.2e} relative); surface grid {:.3} s ({} nodes moved); deform {:.3} s on {} ranks ({} + {} iterations, residual {:.1e}, {} ghost nodes, {} coarse aggregates)",
+            rep.param.seconds,
+            rep.model.seconds,
+            rep.model.junction_residual_rel,
+            rep.surface.seconds,
+            rep.surface.moved_nodes,
+            rep.deform.seconds,
+            d.ranks,
+            d.iterations,
+            d.rotation_iterations,
+            d.residual,
+            d.ghost_nodes,
+            d.coarse_aggregates
+        ),
+        None => outln!("no wall node moved: the baseline grid"),
+    }
+    outln!(
+        "quality min {:.4} → {:.4}, mean {:.4} → {:.4}, inverted {} → {}",
+        rep.quality_before.min,
+        rep.quality_after.min,
+        rep.quality_before.mean,
+        rep.quality_after.mean,
+        rep.quality_before.inverted,
+        rep.quality_after.inverted
+    );
+    for w in &written {
+        outln!("wrote {w}");
+    }
+    eprintln!("[run] done in {:.2} s", t0.elapsed().as_secs_f64());
+    Ok(())
+}
