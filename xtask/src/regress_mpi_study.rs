@@ -21,7 +21,11 @@ fn case(root: &Path, out: &Path) -> Result<std::path::PathBuf, String> {
             &format!("geometry: {:?}", abs("wing_body.ron")),
             1,
         )
-        .replacen("grid: \"grid.msh\"", &format!("grid: {:?}", abs("grid.msh")), 1);
+        .replacen(
+            "grid: \"grid.msh\"",
+            &format!("grid: {:?}", abs("grid.msh")),
+            1,
+        );
     if text.contains("\n  deform:") {
         return Err("fixtures/cases/default/case.ron: a deform field; update the test".into());
     }

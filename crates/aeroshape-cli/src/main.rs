@@ -25,8 +25,6 @@ mod case;
 mod deform;
 #[cfg(feature = "mpi")]
 mod deform_mpi;
-#[cfg(feature = "mpi")]
-mod run_mpi;
 mod geom;
 mod geom_import;
 mod gradient;
@@ -35,6 +33,8 @@ mod param;
 mod pictures;
 mod plot;
 mod run;
+#[cfg(feature = "mpi")]
+mod run_mpi;
 mod section;
 mod surfgrid;
 

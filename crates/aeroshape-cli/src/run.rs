@@ -149,7 +149,12 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     put("geometry.ron", &|w| ev.geometry.write_ron(w))?;
     if !a.no_pictures {
         let before = (study.geometry(), study.baseline_quality());
-        pictures(before, (&ev.geometry, &ev.cell_quality), &a.output, &mut written)?;
+        pictures(
+            before,
+            (&ev.geometry, &ev.cell_quality),
+            &a.output,
+            &mut written,
+        )?;
     }
     let report_path = out("report.json");
     written.push(report_path.display().to_string());
@@ -226,24 +231,13 @@ pub(crate) fn pictures(
     .map_err(anyhow::Error::msg)?;
     written.push(out("quality.png").display().to_string());
     if !wings.is_empty() {
-        crate::pictures::wing_planform(
-            &out("planform.png"),
-            baseline,
-            geometry,
-            &wings,
-        )
-        .map_err(anyhow::Error::msg)?;
+        crate::pictures::wing_planform(&out("planform.png"), baseline, geometry, &wings)
+            .map_err(anyhow::Error::msg)?;
         written.push(out("planform.png").display().to_string());
         let (lo, hi) = span_range(baseline, &wings);
         let stations = [lo + 0.2 * (hi - lo), 0.5 * (lo + hi), hi - 0.02 * (hi - lo)];
-        crate::pictures::wing_sections(
-            &out("sections.png"),
-            baseline,
-            geometry,
-            &wings,
-            &stations,
-        )
-        .map_err(anyhow::Error::msg)?;
+        crate::pictures::wing_sections(&out("sections.png"), baseline, geometry, &wings, &stations)
+            .map_err(anyhow::Error::msg)?;
         written.push(out("sections.png").display().to_string());
     }
     Ok(())

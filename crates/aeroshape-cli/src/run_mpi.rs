@@ -10,10 +10,10 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use deform::distributed::{DistReport, all_ok, mpi};
-use mpi::collective::SystemOperation;
-use mpi::traits::*;
 use mesh::io::Format;
 use mesh::msh::Encoding;
+use mpi::collective::SystemOperation;
+use mpi::traits::*;
 use serde::Serialize;
 
 use aeroshape::case::{Case, load_design_values};
@@ -81,11 +81,13 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     }
     let study = DistributedStudy::new(&world, case, &a.case)?;
     let x = match &a.dv {
-        Some(p) => load_design_values(p).map_err(anyhow::Error::from).and_then(|v| {
-            study
-                .vector_from_values(&v)
-                .with_context(|| p.display().to_string())
-        }),
+        Some(p) => load_design_values(p)
+            .map_err(anyhow::Error::from)
+            .and_then(|v| {
+                study
+                    .vector_from_values(&v)
+                    .with_context(|| p.display().to_string())
+            }),
         None => Ok(study.initial()),
     };
     // The same files on every rank: the same outcome.
@@ -164,7 +166,9 @@ fn write(
         written.push(p.display().to_string());
         anyhow::Ok(())
     };
-    put("deformed.su2", &|w| mesh::io::write(&r.grid, Format::Su2, w))?;
+    put("deformed.su2", &|w| {
+        mesh::io::write(&r.grid, Format::Su2, w)
+    })?;
     put("deformed.msh", &|w| {
         mesh::io::write(&r.grid, Format::Msh(Encoding::Ascii), w)
     })?;
@@ -175,7 +179,9 @@ fn write(
             w,
         )
     })?;
-    put("baseline.su2", &|w| mesh::io::write(baseline, Format::Su2, w))?;
+    put("baseline.su2", &|w| {
+        mesh::io::write(baseline, Format::Su2, w)
+    })?;
     put("geometry.ron", &|w| ev.geometry.write_ron(w))?;
     if !a.no_pictures {
         super::run::pictures(

@@ -37,7 +37,9 @@ use param::Prepared;
 use surfgrid::{ClassifyOptions, NodeSupport, SurfaceGrid};
 
 use super::error::{Result, StudyError};
-use super::report::{DeformPhase, ModelPhase, ParamPhase, Quality, Report, SetupReport, SurfacePhase};
+use super::report::{
+    DeformPhase, ModelPhase, ParamPhase, Quality, Report, SetupReport, SurfacePhase,
+};
 use crate::case::Case;
 
 /// What rank 0 holds besides the other ranks' share: the whole grid.
@@ -311,7 +313,11 @@ impl<'c> DistributedStudy<'c> {
                 .iter()
                 .filter_map(|m| grid.marker(m))
                 .flat_map(|m| m.elements.node_set())
-                .chain(crate::precedence::held_nodes(&grid, &case.wall, &case.slide))
+                .chain(crate::precedence::held_nodes(
+                    &grid,
+                    &case.wall,
+                    &case.slide,
+                ))
                 .filter(|&v| !wall[v as usize])
                 .collect();
             fixed_nodes.sort_unstable();
@@ -467,11 +473,7 @@ impl<'c> DistributedStudy<'c> {
     /// Runs the chain for the design vector `x` on every rank (collective); see the module
     /// doc. `progress(phase)` is called as each phase starts (`param`, `model update`,
     /// `surface grid`, `deform`).
-    pub fn evaluate(
-        &self,
-        x: &[f64],
-        progress: &mut dyn FnMut(&str),
-    ) -> Result<DistEvaluation> {
+    pub fn evaluate(&self, x: &[f64], progress: &mut dyn FnMut(&str)) -> Result<DistEvaluation> {
         let t_all = Instant::now();
         let comm = self.comm;
         let (geometry, surface, param, model, surface_phase) =
@@ -565,7 +567,11 @@ impl<'c> DistributedStudy<'c> {
             displacements.extend(r.fixed_nodes.iter().map(|&v| (v, [0.0; 3])));
             super::setup::deform_markers(&self.case, displacements)
         });
-        let whole = self.root.as_ref().zip(bc.as_ref()).map(|(r, bc)| (&r.grid, bc));
+        let whole = self
+            .root
+            .as_ref()
+            .zip(bc.as_ref())
+            .map(|(r, bc)| (&r.grid, bc));
         let opts = self.case.deform.options();
         let d = deform::distributed::Deformer::from_root(comm, whole, &opts)
             .map_err(|source| StudyError::DeformSetup {
