@@ -3,7 +3,9 @@
 //! of ranks as the block Jacobi of per-rank multigrid alone makes them.
 //!
 //! Coarse space ([`CoarseSpace`], made once per set-up): each rank cuts its free unknowns
-//! (those without a sliding constraint) into `parts` aggregates by coordinate bisection;
+//! (those without a sliding constraint) into `parts` aggregates by coordinate bisection,
+//! more when they would hold over [`COARSE_SIZE`] unknowns each (up to [`COARSE_MAX`]
+//! over the ranks);
 //! P has, per aggregate and per component, the vector that is 1 on the aggregate's unknowns
 //! and 0 elsewhere. The constrained unknowns are left out, so that P lies in the range of
 //! the constraints' projection Π and the coarse problem is that of the projected operator.
@@ -31,6 +33,7 @@ use sparse::{SymMatrix, V3};
 use super::comm::Comm;
 use super::halo::Halo;
 use super::rcb::rcb;
+use super::solve::DistOperator;
 use crate::error::{Error, Result};
 
 /// No aggregate (a constrained unknown).
@@ -46,7 +49,8 @@ pub(crate) struct CoarseSpace {
 
 impl CoarseSpace {
     /// Cuts this rank's free owned unknowns (`coords`, `constrained` per owned unknown) into
-    /// `parts` aggregates (fewer when there are fewer unknowns) and brings the ghost unknowns'
+    /// at least `parts` aggregates ([`per_rank`]: more in parts of over [`COARSE_SIZE`]
+    /// unknowns, fewer when there are fewer unknowns) and brings the ghost unknowns'
     /// aggregates from their owners (`halo` over `n_all` local unknowns). Collective.
     pub fn new(
         comm: &Comm,
@@ -57,7 +61,7 @@ impl CoarseSpace {
         parts: usize,
     ) -> Self {
         let free: Vec<usize> = (0..coords.len()).filter(|&k| !constrained[k]).collect();
-        let k = parts.min(free.len());
+        let k = per_rank(parts, free.len(), comm.size() as usize);
         let xs: Vec<[f64; 3]> = free.iter().map(|&i| coords[i]).collect();
         let part = rcb(&xs, k);
         let mut counts = vec![0u64; comm.size() as usize];
@@ -79,6 +83,28 @@ impl CoarseSpace {
     }
 }
 
+/// Unknowns per aggregate above which a rank cuts more aggregates than asked: the coarse
+/// space then keeps a fixed resolution as the ranks' parts grow (at 1M nodes on 2 ranks,
+/// 256 aggregates per rank held ~2 000 unknowns each and left 55 + 34 iterations, 1 015
+/// per rank 47 + 32; docs/perf-log/2026-12-03-mpi-round2.md).
+pub(crate) const COARSE_SIZE: usize = 500;
+
+/// Over the ranks, at most this many aggregates come from [`COARSE_SIZE`] (the coarse
+/// matrix is factorised on every rank: 8 192 aggregates at 1M nodes took longer to
+/// factorise and solve than their fewer iterations saved).
+pub(crate) const COARSE_MAX: usize = 2048;
+
+/// Aggregates of a rank with `free` free unknowns out of `p` ranks: at least `parts` (the
+/// caller's count; 0 turns the coarse level off), more when they would hold over
+/// [`COARSE_SIZE`] unknowns, up to [`COARSE_MAX`] / `p`; never more than `free`.
+fn per_rank(parts: usize, free: usize, p: usize) -> usize {
+    if parts == 0 {
+        return 0;
+    }
+    let by_size = free.div_ceil(COARSE_SIZE).min(COARSE_MAX / p.max(1));
+    parts.max(by_size).min(free)
+}
+
 /// The coarse operator of one matrix: the owned rows of A P and the factor of A_c.
 pub(crate) struct CoarseOp {
     /// The space's aggregates.
@@ -98,8 +124,9 @@ impl CoarseOp {
     /// A P on the owned rows of `a` (`n_own` rows; columns: local unknowns), and A_c = Pᵀ A P
     /// gathered and factorised on every rank. Collective; an error (A_c not positive
     /// definite) is the same on every rank.
-    pub fn new(comm: &Comm, space: &CoarseSpace, a: &SymMatrix<f32>, n_own: usize) -> Result<Self> {
+    pub fn new(comm: &Comm, space: &CoarseSpace, a: &DistOperator, n_own: usize) -> Result<Self> {
         let agg = &space.agg;
+        let diag = a.diag();
         let (mut off, mut col, mut val) = (vec![0], Vec::new(), Vec::new());
         let mut buf: Vec<(u32, f64)> = Vec::new();
         // Pᵀ A P's entries of the owned rows: (I, J, value), merged per row.
@@ -107,15 +134,14 @@ impl CoarseOp {
         for k in 0..n_own {
             buf.clear();
             if agg[k] != NONE {
-                buf.push((agg[k], a.diag[k]));
+                buf.push((agg[k], diag[k]));
             }
-            let (cols, vals) = a.row(k);
-            for (&c, &v) in cols.iter().zip(vals) {
-                let g = agg[c as usize];
+            a.row_entries(k, |c, v| {
+                let g = agg[c];
                 if g != NONE {
-                    buf.push((g, f64::from(v)));
+                    buf.push((g, v));
                 }
-            }
+            });
             merge_row(&mut buf);
             for &(g, v) in &buf {
                 col.push(g);
@@ -145,17 +171,10 @@ impl CoarseOp {
         })
     }
 
-    /// A_c⁻¹ t, the three components solved apart.
+    /// A_c⁻¹ t, the three components in one pass over the factor.
     fn solve(&self, t: &[f64]) -> Vec<V3> {
-        let n = self.n;
-        let mut out = vec![[0.0; 3]; n];
-        for q in 0..3 {
-            let b: Vec<f64> = (0..n).map(|i| t[3 * i + q]).collect();
-            for (o, v) in out.iter_mut().zip(self.chol.solve(&b)) {
-                o[q] = v;
-            }
-        }
-        out
+        let b: Vec<V3> = t.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        self.chol.solve3(&b)
     }
 
     /// Σ over the ranks of a coarse vector (3 n_c values).
@@ -273,4 +292,24 @@ fn coarse_matrix(n: usize, i: &[u32], j: &[u32], v: &[f64]) -> SymMatrix<f64> {
         m.offsets.push(m.cols.len());
     }
     m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn aggregates_per_rank_keep_their_size_up_to_the_cap() {
+        // 98k nodes on 2 ranks: ~49k unknowns per rank, the caller's 256 hold fewer than
+        // COARSE_SIZE each.
+        assert_eq!(per_rank(256, 49_000, 2), 256);
+        // 1M nodes on 2 ranks: 507 000 / 500 = 1 014.
+        assert_eq!(per_rank(256, 507_000, 2), 1_014);
+        // Capped at COARSE_MAX over the ranks, but never below the caller's count.
+        assert_eq!(per_rank(256, 10_000_000, 4), COARSE_MAX / 4);
+        assert_eq!(per_rank(256, 10_000_000, 64), 256);
+        // Off, and never more aggregates than unknowns.
+        assert_eq!(per_rank(0, 507_000, 2), 0);
+        assert_eq!(per_rank(256, 100, 2), 100);
+    }
 }

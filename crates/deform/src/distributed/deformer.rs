@@ -11,7 +11,7 @@ use mesh::{Elements, Marker, Mesh};
 use mpi::datatype::PartitionMut;
 use mpi::traits::*;
 use serde::Serialize;
-use sparse::{Constraints, V3};
+use sparse::{Constraints, V3, order};
 
 use super::coarse::{CoarseOp, CoarseSpace};
 use super::comm::{Comm, agree, max, min, sum_u64};
@@ -20,7 +20,7 @@ use super::metis::Partitioner;
 use super::partition::{LocalGrid, Partition};
 use super::rfield::{Ctx, rotations};
 use super::scatter::Local;
-use super::solve::DistOperator;
+use super::solve::{DistOperator, Overlap};
 use crate::assembly::{System, rhs};
 use crate::bc::{BoundaryConditions, NodeRole};
 use crate::error::{Error, Result};
@@ -90,8 +90,9 @@ pub struct DistDeformed {
     pub report: DistReport,
 }
 
-/// Aggregates per rank of the coarse-grid correction by default ([`Deformer::coarse_parts`]):
-/// iterations at 1, 2 and 4 ranks in docs/mpi.md, "Coarse-grid correction".
+/// The least aggregates per rank of the coarse-grid correction by default
+/// ([`Deformer::coarse_parts`]): iterations at 1, 2 and 4 ranks in docs/mpi.md,
+/// "Coarse-grid correction".
 pub const COARSE_PARTS: usize = 256;
 
 /// The distributed deformation set-up on a communicator.
@@ -110,6 +111,45 @@ pub struct Deformer<'c> {
     scale: f64,
     /// Aggregates per rank of the coarse-grid correction (0: none).
     coarse_parts: usize,
+    /// One layer of overlap in the blocks of the preconditioner.
+    overlap: bool,
+}
+
+/// The owned unknowns' nodes `nodes` renumbered as the serial solver numbers the grid
+/// (`crate::Deformer`'s renumbering): along a Morton curve, then breadth-first over the
+/// graph of the owned unknowns, so that a row's neighbours lie close in memory. The
+/// product, the multigrid's set-up and its cycle then run at the serial solver's speed: in
+/// the order of a Gmsh-made grid's nodes (scattered over the volume) one rank took ~3×
+/// the serial time per iteration (docs/perf-log/2026-12-03-mpi-round2.md).
+fn locality_order(nodes: &[u32], adj: &mesh::Adjacency, coords: &[[f64; 3]]) -> Vec<u32> {
+    let m = nodes.len();
+    if m < 2 {
+        return nodes.to_vec();
+    }
+    let mut at = vec![u32::MAX; coords.len()];
+    for (k, &i) in nodes.iter().enumerate() {
+        at[i as usize] = k as u32;
+    }
+    let (mut off, mut nb) = (Vec::with_capacity(m + 1), Vec::new());
+    off.push(0usize);
+    for &i in nodes {
+        nb.extend(
+            adj.neighbours(i as usize)
+                .iter()
+                .map(|&j| at[j as usize])
+                .filter(|&a| a != u32::MAX),
+        );
+        off.push(nb.len());
+    }
+    let xs: Vec<[f64; 3]> = nodes.iter().map(|&i| coords[i as usize]).collect();
+    let morton = order::morton_order(&xs);
+    let g = order::permute_graph(m, |k| &nb[off[k]..off[k + 1]], &morton);
+    let level = order::level_order(m, |a| &g.adj[g.offsets[a]..g.offsets[a + 1]]);
+    let mut out = vec![0u32; m];
+    for (&i, &p) in nodes.iter().zip(&order::then(&morton, &level)) {
+        out[p as usize] = i;
+    }
+    out
 }
 
 /// True when this rank counts the element `e` of its local grid: it owns the element's node
@@ -187,6 +227,7 @@ impl<'c> Deformer<'c> {
             .filter(|&i| is_unk(i))
             .map(|i| i as u32)
             .collect();
+        let node_of = locality_order(&node_of, &part.adj, &part.grid.mesh.coords);
         let mut ghost: Vec<u32> = (n_owned..n)
             .filter(|&i| is_unk(i))
             .map(|i| i as u32)
@@ -198,6 +239,7 @@ impl<'c> Deformer<'c> {
         for (k, &i) in unk_node.iter().enumerate() {
             unk_of[i as usize] = k as u32;
         }
+        // In unknown order, as `Constraints` keeps them.
         let items = node_of
             .iter()
             .enumerate()
@@ -246,13 +288,24 @@ impl<'c> Deformer<'c> {
             setup,
             scale: length_scale(diag, opts.stiffness),
             coarse_parts: COARSE_PARTS,
+            overlap: true,
         })
     }
 
-    /// Sets the aggregates per rank of the coarse-grid correction (0: block preconditioner
-    /// alone). On one rank there is none: the block is the whole grid's multigrid.
+    /// Sets the least aggregates per rank of the coarse-grid correction (0: block
+    /// preconditioner alone); a rank cuts more when they would hold over 500 unknowns each
+    /// (at most 4 096 over the ranks). On one rank there is none: the block is the whole
+    /// grid's multigrid.
     pub fn coarse_parts(mut self, parts: usize) -> Self {
         self.coarse_parts = parts;
+        self
+    }
+
+    /// Sets whether the blocks of the preconditioner overlap by one layer (the ghost
+    /// unknowns: symmetric additive Schwarz; default) or not (block Jacobi). Multigrid
+    /// blocks only; iterations of both in docs/mpi.md.
+    pub fn overlap(mut self, on: bool) -> Self {
+        self.overlap = on;
         self
     }
 
@@ -399,10 +452,15 @@ impl<'c> Deformer<'c> {
         let t = Instant::now();
         let mut sp = springs(&part.grid.mesh, cur, opts.stiffness, &part.adj, &[], None);
         sp.scale = self.scale;
-        let op = DistOperator::new(sys, &part.adj, &sp, sys.node_of.len(), opts);
+        let overlap = (self.overlap && comm.size() > 1).then_some(Overlap {
+            comm,
+            halo: &self.unk_halo,
+            unk_node: &self.unk_node,
+        });
+        let op = DistOperator::new(sys, &part.adj, &sp, sys.node_of.len(), opts, overlap);
         let mut op = agree(comm, op)?;
         if let Some(space) = coarse {
-            let c = CoarseOp::new(comm, space, op.matrix(), sys.node_of.len());
+            let c = CoarseOp::new(comm, space, &op, sys.node_of.len());
             op.coarse = Some(agree(comm, c)?);
         }
         sec.assemble += t.elapsed().as_secs_f64();
@@ -421,7 +479,7 @@ impl<'c> Deformer<'c> {
         let rf = rotations(&ctx, &op, cur, &target)?;
         sec.rotation += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let a = op.matrix();
+        let op_ref = &op;
         let cur_ref: &[[f64; 3]] = cur;
         let unk_node = &self.unk_node;
         let disp = |j: usize| {
@@ -433,13 +491,12 @@ impl<'c> Deformer<'c> {
             if !rf.any {
                 return s;
             }
-            let (cols, vals) = a.row(k);
-            for (&c, &akl) in cols.iter().zip(vals) {
-                let r = rf.minus_identity(i, unk_node[c as usize] as usize, cur_ref);
+            op_ref.row_entries(k, |c, akl| {
+                let r = rf.minus_identity(i, unk_node[c] as usize, cur_ref);
                 for q in 0..3 {
-                    s[q] += f64::from(akl) * r[q];
+                    s[q] += akl * r[q];
                 }
-            }
+            });
             let (nodes, kij) = op.couplings.row(k);
             for (&j, &kij) in nodes.iter().zip(kij) {
                 let r = rf.minus_identity(i, j as usize, cur_ref);

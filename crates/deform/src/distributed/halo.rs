@@ -85,6 +85,44 @@ impl Halo {
         self.exchange_overlapped(comm, v, |_| {});
     }
 
+    /// Adds the ghost entries of `v` into their owners' entries (the reverse of
+    /// [`Halo::exchange`]: each rank sends its ghosts' values to their owners, which add
+    /// them in rank order); the ghost entries are left as they are.
+    pub fn accumulate<const W: usize>(&self, comm: &Comm, v: &mut [[f64; W]]) {
+        let packed: Vec<Vec<f64>> = self
+            .recv
+            .iter()
+            .map(|(_, l)| l.iter().flat_map(|&e| v[e as usize]).collect())
+            .collect();
+        let total: usize = self.send.iter().map(|s| s.1.len() * W).sum();
+        let mut rbuf = vec![0.0f64; total];
+        scope(|sc| {
+            let mut reqs: Vec<Request<'_, [f64], _>> = Vec::new();
+            let mut rest = &mut rbuf[..];
+            for (r, l) in &self.send {
+                let (a, b) = rest.split_at_mut(l.len() * W);
+                rest = b;
+                reqs.push(comm.process_at_rank(*r).immediate_receive_into(sc, a));
+            }
+            for ((r, _), buf) in self.recv.iter().zip(&packed) {
+                reqs.push(comm.process_at_rank(*r).immediate_send(sc, &buf[..]));
+            }
+            for q in reqs {
+                q.wait_without_status();
+            }
+        });
+        let mut at = 0;
+        for (_, l) in &self.send {
+            for &e in l {
+                let dst = &mut v[e as usize];
+                for (d, s) in dst.iter_mut().zip(&rbuf[at..at + W]) {
+                    *d += s;
+                }
+                at += W;
+            }
+        }
+    }
+
     /// Fills the ghost entries of `v` from their owners; `work` runs on `v` (read only)
     /// while the messages travel, so it may read the owned entries only.
     pub fn exchange_overlapped<const W: usize, F>(&self, comm: &Comm, v: &mut [[f64; W]], work: F)

@@ -1,13 +1,15 @@
 //! The distributed linear solve of Eqs. 21 and 26: the matrix rows of a rank's owned
-//! unknowns ([`DistOperator`], assembled by deform's own `assemble` on the local grid), the
-//! product with the halo exchange of the ghost unknowns overlapped with the interior rows,
-//! and projected conjugate gradients with all-reduced dot products, preconditioned by a
-//! block-Jacobi of per-rank multigrid (or Jacobi) on the owned–owned block.
+//! unknowns ([`DistOperator`], assembled by deform's own `assemble` on the local grid) kept
+//! as the owned–owned block (the serial solver's matrix, which the block multigrid holds)
+//! and the few ghost columns of the boundary rows; the product A_own x computed by the
+//! serial kernel while the ghost unknowns travel, then the ghost columns added; and
+//! projected conjugate gradients with all-reduced dot products and the serial solver's
+//! fused updates, preconditioned by a block-Jacobi of per-rank multigrid (or Jacobi) with
+//! the coarse-grid correction across the ranks.
 
 use std::time::Instant;
 
-use rayon::prelude::*;
-use sparse::vec3::{CHUNK, V3, dot};
+use sparse::vec3::{V3, axpy, axpy_xpby, dot};
 use sparse::{Constraints, Csr, Jacobi, Preconditioner, SolveReport, SymMatrix};
 
 use super::coarse::CoarseOp;
@@ -21,146 +23,243 @@ use crate::stiffness::Springs;
 
 /// The preconditioner of a rank's block.
 enum Block {
+    /// The serial multigrid; it owns the owned–owned block.
     Amg(Box<Amg<'static, f32>>),
-    Jacobi(Jacobi),
-    /// No owned unknown.
-    Empty,
+    /// The serial multigrid on the block extended by the ghost unknowns (one layer of
+    /// overlap), beside the owned–owned block, and the weight 1/√m of each extended
+    /// unknown, m the number of blocks that hold it.
+    Overlap(Box<Amg<'static, f32>>, SymMatrix<f32>, Vec<f64>),
+    /// The diagonal, with the owned–owned block beside it.
+    Jacobi(Jacobi, SymMatrix<f32>),
+}
+
+/// What the block extended by the ghost unknowns needs (see [`DistOperator::new`]).
+pub(crate) struct Overlap<'a> {
+    pub comm: &'a Comm,
+    /// The halo of the unknowns.
+    pub halo: &'a Halo,
+    /// Local node of every local unknown (owned, then ghosts).
+    pub unk_node: &'a [u32],
 }
 
 /// Eq. 21's matrix on a rank: rows of the owned unknowns, columns of the local unknowns
 /// (owned, then ghosts), the couplings to prescribed nodes and the block preconditioner.
 pub(crate) struct DistOperator {
-    /// Rows of the owned unknowns; column indices ≥ `n_own` are ghost unknowns.
-    a: SymMatrix<f32>,
     n_own: usize,
-    /// Rows with a ghost column (computed once the halo has arrived).
-    boundary: Vec<u32>,
-    /// Rows without (computed while it travels).
-    interior: Vec<u32>,
+    /// The owned–owned block and its preconditioner.
     block: Block,
+    /// The ghost columns of the owned rows (column: local unknown ≥ `n_own`).
+    ghost: Csr,
+    /// The owned rows that have a ghost column.
+    ghost_rows: Vec<u32>,
     /// The springs from each owned unknown to its prescribed neighbours.
     pub couplings: Csr,
     /// The coarse-grid correction across the ranks (none on one rank).
     pub coarse: Option<CoarseOp>,
 }
 
+/// The vectors of one solve, allocated once.
+struct Work {
+    /// The preconditioner's scratch (the multigrid's finest iterate).
+    work: Vec<V3>,
+    /// The residual and the correction on the extended block (overlap; else empty).
+    r_ext: Vec<V3>,
+    z_ext: Vec<V3>,
+    /// The coarse correction's scratch.
+    s: Vec<V3>,
+}
+
 impl DistOperator {
     /// Assembles at the springs `sp` on the local system `sys` (rows: owned unknowns; the
     /// unknown numbering of `sys` covers the ghost unknowns too).
+    ///
+    /// With `overlap` (multigrid only; collective), the block preconditioner is the
+    /// weighted symmetric additive Schwarz one of one layer of overlap,
+    /// B = Σ_i R_iᵀ W_i B_i W_i R_i: B_i the multigrid on rank i's owned and ghost unknowns,
+    /// whose ghost rows hold their springs to the rank's local unknowns and their owners'
+    /// diagonals (the ghosts' neighbours beyond the layer held at zero), R_i the restriction
+    /// to them (the ghosts' values brought by the halo), R_iᵀ the ghosts' corrections added
+    /// to their owners', W_i the weights 1/√m of the unknowns held by m blocks (Σ_i R_iᵀ
+    /// W_i² R_i = I). Without the weights the unknowns at a junction of several ranks were
+    /// over-corrected: at 98k nodes, -n 4 took 46 iterations against 42 without overlap
+    /// and 30 with the weights (docs/perf-log/2026-12-03-mpi-round2.md).
     pub fn new(
         sys: &System,
         adj: &mesh::Adjacency,
         sp: &Springs,
         n_own: usize,
         opts: &DeformOptions,
+        overlap: Option<Overlap>,
     ) -> Result<Self> {
         let a = assemble(sys, adj, sp)?;
         let couplings = couplings(sys, adj, sp);
-        let (mut boundary, mut interior) = (Vec::new(), Vec::new());
-        for k in 0..n_own {
-            if a.row(k).0.iter().any(|&c| c as usize >= n_own) {
-                boundary.push(k as u32);
-            } else {
-                interior.push(k as u32);
-            }
-        }
-        // The owned–owned block.
-        let mut own = SymMatrix {
-            diag: a.diag.clone(),
-            offsets: vec![0],
-            cols: Vec::new(),
-            vals: Vec::new(),
-        };
-        for k in 0..n_own {
+        let n_all = overlap.as_ref().map_or(n_own, |o| o.unk_node.len());
+        // The ghost columns (the rows' columns are sorted: owned ones first).
+        let ghost = Csr::from_rows(n_own, n_all, |k, row| {
             let (c, v) = a.row(k);
-            for (&c, &v) in c.iter().zip(v) {
-                if (c as usize) < n_own {
-                    own.cols.push(c);
-                    own.vals.push(v);
-                }
+            let at = c.partition_point(|&c| (c as usize) < n_own);
+            row.extend(
+                c[at..]
+                    .iter()
+                    .zip(&v[at..])
+                    .map(|(&c, &v)| (c, f64::from(v))),
+            );
+        });
+        let ghost_rows = (0..n_own)
+            .filter(|&k| ghost.offsets[k + 1] > ghost.offsets[k])
+            .map(|k| k as u32)
+            .collect();
+        let ext = match &overlap {
+            Some(o) if opts.solver == SolverKind::PcgMultigrid => {
+                Some(extended(o, sys, adj, sp, &a)).filter(|_| n_own > 0)
             }
-            own.offsets.push(own.cols.len());
-        }
-        let block = if n_own == 0 {
-            Block::Empty
+            _ => None,
+        };
+        // The owned–owned block: `a` without its ghost columns.
+        let own = if ghost.cols.is_empty() {
+            a
         } else {
-            match opts.solver {
-                SolverKind::PcgMultigrid => {
-                    Block::Amg(Box::new(Amg::new_owned(own, &AmgOptions::default())?))
-                }
-                _ => Block::Jacobi(Jacobi::new(&own)),
+            let mut own = SymMatrix {
+                diag: a.diag.clone(),
+                offsets: Vec::with_capacity(n_own + 1),
+                cols: Vec::with_capacity(a.cols.len() - ghost.cols.len()),
+                vals: Vec::with_capacity(a.cols.len() - ghost.cols.len()),
+            };
+            own.offsets.push(0);
+            for k in 0..n_own {
+                let (c, v) = a.row(k);
+                let at = c.partition_point(|&c| (c as usize) < n_own);
+                own.cols.extend_from_slice(&c[..at]);
+                own.vals.extend_from_slice(&v[..at]);
+                own.offsets.push(own.cols.len());
             }
+            own
+        };
+        let block = match opts.solver {
+            _ if ext.is_some() => {
+                let (ext, wt) = ext.expect("the extended block");
+                Block::Overlap(
+                    Box::new(Amg::new_owned(ext, &AmgOptions::default())?),
+                    own,
+                    wt,
+                )
+            }
+            SolverKind::PcgMultigrid if n_own > 0 => {
+                Block::Amg(Box::new(Amg::new_owned(own, &AmgOptions::default())?))
+            }
+            _ => Block::Jacobi(Jacobi::new(&own), own),
         };
         Ok(Self {
-            a,
             n_own,
-            boundary,
-            interior,
             block,
+            ghost,
+            ghost_rows,
             couplings,
             coarse: None,
         })
     }
 
-    /// The rows of the owned unknowns.
-    pub fn matrix(&self) -> &SymMatrix<f32> {
-        &self.a
+    /// The owned–owned block.
+    fn own(&self) -> &SymMatrix<f32> {
+        match &self.block {
+            Block::Amg(m) => m.fine(),
+            Block::Overlap(_, a, _) | Block::Jacobi(_, a) => a,
+        }
     }
 
-    fn row(&self, k: usize, x: &[V3]) -> V3 {
-        let (cols, vals) = self.a.row(k);
-        let d = self.a.diag[k];
-        let mut s = [d * x[k][0], d * x[k][1], d * x[k][2]];
-        for (&c, &v) in cols.iter().zip(vals) {
-            let (v, xc) = (f64::from(v), x[c as usize]);
+    /// The diagonal of the owned rows.
+    pub fn diag(&self) -> &[f64] {
+        &self.own().diag
+    }
+
+    /// Calls `f(column, a_kc)` for the off-diagonal entries of owned row `k` (owned
+    /// columns in increasing order, then the ghost ones).
+    #[inline]
+    pub fn row_entries(&self, k: usize, mut f: impl FnMut(usize, f64)) {
+        let (c, v) = self.own().row(k);
+        for (&c, &v) in c.iter().zip(v) {
+            f(c as usize, f64::from(v));
+        }
+        let (c, v) = self.ghost.row(k);
+        for (&c, &v) in c.iter().zip(v) {
+            f(c as usize, v);
+        }
+    }
+
+    /// y = A x on the owned rows, and returns x · y over the owned unknowns (this rank's
+    /// part); `x` holds the owned unknowns and receives the ghost ones from their owners
+    /// while the owned–owned block's product is computed.
+    pub fn mul_dot(&self, comm: &Comm, halo: &Halo, x: &mut [V3], y: &mut [V3]) -> f64 {
+        let n = self.n_own;
+        let mut xy = 0.0;
+        halo.exchange_overlapped(comm, x, |x| xy = self.own().mul_dot(&x[..n], y));
+        for &k in &self.ghost_rows {
+            let k = k as usize;
+            let (c, v) = self.ghost.row(k);
+            let mut s = [0.0; 3];
+            for (&c, &v) in c.iter().zip(v) {
+                let xc = x[c as usize];
+                for q in 0..3 {
+                    s[q] += v * xc[q];
+                }
+            }
             for q in 0..3 {
-                s[q] += v * xc[q];
+                y[k][q] += s[q];
+                xy += x[k][q] * s[q];
             }
         }
-        s
+        xy
     }
 
-    /// y = A x on the owned rows; `x` holds the owned unknowns and receives the ghost ones
-    /// from their owners while the interior rows are computed.
-    pub fn mul(&self, comm: &Comm, halo: &Halo, x: &mut [V3], y: &mut [V3]) {
-        let rows = |list: &[u32], x: &[V3]| -> Vec<V3> {
-            list.par_iter()
-                .with_min_len(CHUNK)
-                .map(|&k| self.row(k as usize, x))
-                .collect()
-        };
-        let mut inner = Vec::new();
-        halo.exchange_overlapped(comm, x, |x| inner = rows(&self.interior, x));
-        let outer = rows(&self.boundary, x);
-        for (&k, v) in self.interior.iter().zip(inner) {
-            y[k as usize] = v;
-        }
-        for (&k, v) in self.boundary.iter().zip(outer) {
-            y[k as usize] = v;
-        }
-    }
-
-    fn block(&self, r: &[V3], z: &mut [V3]) {
+    /// z = B r, B the block preconditioner (collective with overlap).
+    fn block(&self, comm: &Comm, halo: &Halo, r: &[V3], z: &mut [V3], w: &mut Work) {
         match &self.block {
-            Block::Amg(m) => m.apply(r, z),
-            Block::Jacobi(m) => m.apply(r, z),
-            Block::Empty => {}
+            Block::Amg(m) => {
+                m.apply_dot(r, z, &mut w.work);
+            }
+            Block::Overlap(m, _, wt) => {
+                let n = self.n_own;
+                w.r_ext[..n].copy_from_slice(r);
+                halo.exchange(comm, &mut w.r_ext);
+                for (v, &c) in w.r_ext.iter_mut().zip(wt) {
+                    *v = [c * v[0], c * v[1], c * v[2]];
+                }
+                m.apply_dot(&w.r_ext, &mut w.z_ext, &mut w.work);
+                for (v, &c) in w.z_ext.iter_mut().zip(wt) {
+                    *v = [c * v[0], c * v[1], c * v[2]];
+                }
+                halo.accumulate(comm, &mut w.z_ext);
+                z.copy_from_slice(&w.z_ext[..n]);
+            }
+            Block::Jacobi(m, _) => {
+                m.apply_dot(r, z, &mut w.work);
+            }
         }
     }
 
     /// z = M r (projected), M the block preconditioner B alone, or with the coarse-grid
     /// correction Q = P A_c⁻¹ Pᵀ: M = Q + (I − Q A) B (I − A Q) (collective).
-    fn precondition(&self, comm: &Comm, cons: &Constraints, r: &[V3], z: &mut [V3]) {
+    fn precondition(
+        &self,
+        comm: &Comm,
+        halo: &Halo,
+        cons: &Constraints,
+        r: &[V3],
+        z: &mut [V3],
+        w: &mut Work,
+    ) {
         let Some(c) = &self.coarse else {
-            self.block(r, z);
+            self.block(comm, halo, r, z, w);
             cons.project(z);
             return;
         };
         let c1 = c.coarse_of(comm, r);
-        let mut s = r.to_vec();
-        c.sub_product(&c1, &mut s);
-        cons.project(&mut s);
-        self.block(&s, z);
+        w.s.copy_from_slice(r);
+        c.sub_product(&c1, &mut w.s);
+        cons.project(&mut w.s);
+        let s = std::mem::take(&mut w.s);
+        self.block(comm, halo, &s, z, w);
+        w.s = s;
         cons.project(z);
         let mut c2 = c.coarse_of_product(comm, z);
         for (a, b) in c2.iter_mut().zip(&c1) {
@@ -171,8 +270,32 @@ impl DistOperator {
         c.add_prolonged(&c2, z);
     }
 
+    /// r = Π(b − A x) (`full[..n]` receives x); returns |r|² over the ranks.
+    fn residual(
+        &self,
+        comm: &Comm,
+        halo: &Halo,
+        b: &[V3],
+        x: &[V3],
+        full: &mut [V3],
+        cons: &Constraints,
+        r: &mut [V3],
+    ) -> f64 {
+        let n = self.n_own;
+        full[..n].copy_from_slice(x);
+        self.mul_dot(comm, halo, full, r);
+        for (rk, bk) in r.iter_mut().zip(b) {
+            for q in 0..3 {
+                rk[q] = bk[q] - rk[q];
+            }
+        }
+        cons.project(r);
+        sum(comm, dot(r, r))
+    }
+
     /// Projected PCG on A x = b over the ranks (owned unknowns of `b` and `x`; `x` holds the
     /// initial guess), to |b − A x| ≤ `rel_tol` |b| over all ranks.
+    #[allow(clippy::too_many_arguments)]
     pub fn solve(
         &self,
         comm: &Comm,
@@ -191,65 +314,64 @@ impl DistOperator {
         cons.project(x);
         let bnorm = sum(comm, dot(&bp, &bp)).sqrt();
         let scale = if bnorm > 0.0 { bnorm } else { 1.0 };
+        // full[..n] holds p, the ghosts receive theirs in the product.
         let mut full = vec![[0.0; 3]; n_all];
         let mut q = vec![[0.0; 3]; n];
-        let residual = |x: &[V3], full: &mut Vec<V3>, out: &mut [V3]| {
-            full[..n].copy_from_slice(x);
-            self.mul(comm, halo, full, out);
-            for k in 0..n {
-                for c in 0..3 {
-                    out[k][c] = bp[k][c] - out[k][c];
-                }
-            }
-            cons.project(out);
-        };
         let mut r = vec![[0.0; 3]; n];
-        residual(x, &mut full, &mut r);
         let mut z = vec![[0.0; 3]; n];
-        self.precondition(comm, cons, &r, &mut z);
-        let [mut rr, mut rz] = sum_n(comm, [dot(&r, &r), dot(&r, &z)]);
+        let n_ext = match &self.block {
+            Block::Overlap(m, ..) => m.fine().n(),
+            _ => 0,
+        };
+        let mut w = Work {
+            work: vec![[0.0; 3]; n.max(n_ext)],
+            r_ext: vec![[0.0; 3]; n_ext],
+            z_ext: vec![[0.0; 3]; n_ext],
+            s: if self.coarse.is_some() {
+                vec![[0.0; 3]; n]
+            } else {
+                Vec::new()
+            },
+        };
+        let rr = self.residual(comm, halo, &bp, x, &mut full, cons, &mut r);
         let name = match (&self.block, &self.coarse) {
             (Block::Amg(_), None) => "block-amg",
             (Block::Amg(_), Some(_)) => "block-amg-coarse",
+            (Block::Overlap(..), None) => "schwarz-amg",
+            (Block::Overlap(..), Some(_)) => "schwarz-amg-coarse",
             (_, None) => "block-jacobi",
             (_, Some(_)) => "block-jacobi-coarse",
         };
         let mut it = 0;
         if rr.sqrt() > rel_tol * scale {
+            self.precondition(comm, halo, cons, &r, &mut z, &mut w);
+            let mut rz = sum(comm, dot(&r, &z));
             full[..n].copy_from_slice(&z);
             while it < opts.max_iters {
                 it += 1;
-                // full[..n] holds p.
-                self.mul(comm, halo, &mut full, &mut q);
-                cons.project(&mut q);
-                let pq = sum(comm, dot(&full[..n], &q));
+                let pq = sum(comm, self.mul_dot(comm, halo, &mut full, &mut q));
                 if pq <= 0.0 || !pq.is_finite() {
                     break;
                 }
+                cons.project(&mut q);
                 let alpha = rz / pq;
-                for k in 0..n {
-                    for c in 0..3 {
-                        x[k][c] += alpha * full[k][c];
-                        r[k][c] -= alpha * q[k][c];
-                    }
-                }
-                self.precondition(comm, cons, &r, &mut z);
-                let [rr_new, rz_new] = sum_n(comm, [dot(&r, &r), dot(&r, &z)]);
-                rr = rr_new;
-                if rr.sqrt() <= rel_tol * scale {
+                axpy(-alpha, &q, &mut r);
+                self.precondition(comm, halo, cons, &r, &mut z, &mut w);
+                let [rr, rz_new] = sum_n(comm, [dot(&r, &r), dot(&r, &z)]);
+                if rr.sqrt() <= rel_tol * scale || it == opts.max_iters {
+                    axpy(alpha, &full[..n], x);
                     break;
                 }
                 let beta = rz_new / rz;
                 rz = rz_new;
-                for k in 0..n {
-                    for c in 0..3 {
-                        full[k][c] = z[k][c] + beta * full[k][c];
-                    }
-                }
+                // x += α p and the next direction in one pass over p.
+                axpy_xpby(alpha, x, &z, beta, &mut full[..n]);
             }
         }
-        residual(x, &mut full, &mut r);
-        let res = sum(comm, dot(&r, &r)).sqrt() / scale;
+        let res = self
+            .residual(comm, halo, &bp, x, &mut full, cons, &mut r)
+            .sqrt()
+            / scale;
         SolveReport {
             solver: format!("pcg-{name}"),
             iterations: it,
@@ -258,4 +380,51 @@ impl DistOperator {
             seconds: t0.elapsed().as_secs_f64(),
         }
     }
+}
+
+/// The block of the owned and ghost unknowns: the owned rows of `a` (ghost columns
+/// included), then per ghost unknown its springs to the local unknowns (in the local
+/// adjacency: the edges of the cells around the owned nodes) and its owner's diagonal
+/// (brought through the halo; collective). Symmetric: a spring is the same number from
+/// either end.
+fn extended(
+    o: &Overlap,
+    sys: &System,
+    adj: &mesh::Adjacency,
+    sp: &Springs,
+    a: &SymMatrix<f32>,
+) -> (SymMatrix<f32>, Vec<f64>) {
+    let (n_own, n_all) = (a.n(), o.unk_node.len());
+    // The blocks that hold each unknown.
+    let mut cnt = vec![[1.0f64]; n_all];
+    o.halo.accumulate(o.comm, &mut cnt);
+    o.halo.exchange(o.comm, &mut cnt);
+    let wt = cnt.iter().map(|c| 1.0 / c[0].sqrt()).collect();
+    let mut d = vec![[0.0f64; 1]; n_all];
+    for (dk, &ak) in d.iter_mut().zip(&a.diag) {
+        dk[0] = ak;
+    }
+    o.halo.exchange(o.comm, &mut d);
+    let mut m = SymMatrix {
+        diag: d.iter().map(|v| v[0]).collect(),
+        offsets: a.offsets.clone(),
+        cols: a.cols.clone(),
+        vals: a.vals.clone(),
+    };
+    let mut row: Vec<(u32, f32)> = Vec::new();
+    for k in n_own..n_all {
+        let i = o.unk_node[k] as usize;
+        row.clear();
+        for &j in adj.neighbours(i) {
+            let u = sys.unk_of[j as usize];
+            if u != u32::MAX {
+                row.push((u, -sp.k(i, j as usize) as f32));
+            }
+        }
+        row.sort_unstable_by_key(|e| e.0);
+        m.cols.extend(row.iter().map(|e| e.0));
+        m.vals.extend(row.iter().map(|e| e.1));
+        m.offsets.push(m.cols.len());
+    }
+    (m, wt)
 }
