@@ -90,8 +90,9 @@ pub struct DeformArgs {
     /// Write the grid even if cells are inverted after the incremental retries.
     #[arg(long)]
     pub allow_inverted: bool,
-    /// Under mpirun: aggregates per rank of the coarse-grid correction of the distributed
-    /// preconditioner (0: the per-rank multigrid blocks alone; docs/mpi.md).
+    /// Under mpirun: the least aggregates per rank of the coarse-grid correction of the
+    /// distributed preconditioner (more when they would hold over 500 unknowns; 0: the
+    /// per-rank multigrid blocks alone; docs/mpi.md).
     #[cfg(feature = "mpi")]
     #[arg(long, value_name = "N", default_value_t = deform::distributed::COARSE_PARTS)]
     pub coarse_parts: usize,
