@@ -13,7 +13,7 @@ use sparse::vec3::{V3, axpy, axpy_xpby, dot};
 use sparse::{Constraints, Csr, Jacobi, Preconditioner, SolveReport, SymMatrix};
 
 use super::coarse::CoarseOp;
-use super::comm::{Comm, sum, sum_n};
+use super::comm::{Comm, agree, sum, sum_n};
 use super::halo::Halo;
 use crate::assembly::{System, assemble, couplings};
 use crate::error::Result;
@@ -52,6 +52,8 @@ pub(crate) struct DistOperator {
     ghost: Csr,
     /// The owned rows that have a ghost column.
     ghost_rows: Vec<u32>,
+    /// The ranks' blocks overlap: every application exchanges through the halo.
+    overlap_halo: bool,
     /// The springs from each owned unknown to its prescribed neighbours.
     pub couplings: Csr,
     /// The coarse-grid correction across the ranks (none on one rank).
@@ -91,7 +93,12 @@ impl DistOperator {
         opts: &DeformOptions,
         overlap: Option<Overlap>,
     ) -> Result<Self> {
-        let a = assemble(sys, adj, sp)?;
+        let a = assemble(sys, adj, sp);
+        // The extended block is collective: the ranks agree on a failure before it.
+        let a = match &overlap {
+            Some(o) => agree(o.comm, a)?,
+            None => a?,
+        };
         let couplings = couplings(sys, adj, sp);
         let n_all = overlap.as_ref().map_or(n_own, |o| o.unk_node.len());
         // The ghost columns (the rows' columns are sorted: owned ones first).
@@ -109,6 +116,7 @@ impl DistOperator {
             .filter(|&k| ghost.offsets[k + 1] > ghost.offsets[k])
             .map(|k| k as u32)
             .collect();
+        let overlap_halo = overlap.is_some() && opts.solver == SolverKind::PcgMultigrid;
         let ext = match &overlap {
             Some(o) if opts.solver == SolverKind::PcgMultigrid => {
                 Some(extended(o, sys, adj, sp, &a)).filter(|_| n_own > 0)
@@ -154,6 +162,7 @@ impl DistOperator {
             block,
             ghost,
             ghost_rows,
+            overlap_halo,
             couplings,
             coarse: None,
         })
@@ -233,6 +242,13 @@ impl DistOperator {
             }
             Block::Jacobi(m, _) => {
                 m.apply_dot(r, z, &mut w.work);
+                if self.overlap_halo {
+                    // A rank without owned unknowns in an overlapping preconditioner: its
+                    // neighbours exchange with it all the same.
+                    let mut v = vec![[0.0; 3]; self.ghost.ncols];
+                    halo.exchange(comm, &mut v);
+                    halo.accumulate(comm, &mut v);
+                }
             }
         }
     }
