@@ -25,58 +25,94 @@ fn v3(a: [f64; 3]) -> Vector3<f64> {
     Vector3::new(a[0], a[1], a[2])
 }
 
-/// The frame S of the points `p` (2 or 3) and its directional derivative for the point
-/// perturbations `dp`.
-fn frame_d(p: &[[f64; 3]], dp: &[[f64; 3]]) -> Option<(Matrix3<f64>, Matrix3<f64>)> {
-    let s = frame(p)?;
-    let e1 = v3(p[1]) - v3(p[0]);
-    let de1 = v3(dp[1]) - v3(dp[0]);
-    let ds = if p.len() >= 3 {
-        let e2 = v3(p[2]) - v3(p[0]);
-        let de2 = v3(dp[2]) - v3(dp[0]);
-        let c = e1.cross(&e2);
-        let dc = de1.cross(&e2) + e1.cross(&de2);
-        let a = c.norm();
-        let da = c.dot(&dc) / a;
-        let dn = dc / a.sqrt() - c * (0.5 * da / (a * a.sqrt()));
-        Matrix3::from_columns(&[de1, de2, dn])
-    } else {
-        let z = Vector3::z();
-        let l = e1.norm();
-        Matrix3::from_columns(&[de1, z.cross(&de1), z * (e1.dot(&de1) / l)])
-    };
-    Some((s, ds))
+/// The frame S of the points `p` (2 or 3), with what its derivatives share: S's
+/// directional derivative along a perturbation of one coordinate is [`FrameD::along`].
+struct FrameD {
+    e1: Vector3<f64>,
+    e2: Vector3<f64>,
+    /// 3D: c = e₁ × e₂, |c| and √|c|; 2D: |e₁| in `a`.
+    c: Vector3<f64>,
+    a: f64,
+    sa: f64,
+    tri: bool,
 }
 
-/// The element size (area of a triangle, length of a segment) and its derivative.
-fn size_d(p: &[[f64; 3]], dp: &[[f64; 3]]) -> f64 {
-    let e1 = v3(p[1]) - v3(p[0]);
-    let de1 = v3(dp[1]) - v3(dp[0]);
-    if p.len() >= 3 {
-        let e2 = v3(p[2]) - v3(p[0]);
-        let de2 = v3(dp[2]) - v3(dp[0]);
-        let c = e1.cross(&e2);
-        0.5 * c.dot(&(de1.cross(&e2) + e1.cross(&de2))) / c.norm()
-    } else {
-        e1.dot(&de1) / e1.norm()
+impl FrameD {
+    fn new(p: &[[f64; 3]]) -> Option<(Matrix3<f64>, Self)> {
+        let s = frame(p)?;
+        let e1 = v3(p[1]) - v3(p[0]);
+        let f = if p.len() >= 3 {
+            let e2 = v3(p[2]) - v3(p[0]);
+            let c = e1.cross(&e2);
+            let a = c.norm();
+            Self {
+                e1,
+                e2,
+                c,
+                a,
+                sa: a.sqrt(),
+                tri: true,
+            }
+        } else {
+            Self {
+                e1,
+                e2: Vector3::zeros(),
+                c: Vector3::zeros(),
+                a: e1.norm(),
+                sa: 0.0,
+                tri: false,
+            }
+        };
+        Some((s, f))
+    }
+
+    /// dS for the perturbation of coordinate `b` of point `a` by 1.
+    fn along(&self, a: usize, b: usize) -> Matrix3<f64> {
+        let mut dp = [Vector3::zeros(); 3];
+        dp[a][b] = 1.0;
+        let de1 = dp[1] - dp[0];
+        if self.tri {
+            let de2 = dp[2] - dp[0];
+            let (c, a) = (self.c, self.a);
+            let dc = de1.cross(&self.e2) + self.e1.cross(&de2);
+            let da = c.dot(&dc) / a;
+            let dn = dc / self.sa - c * (0.5 * da / (a * self.sa));
+            Matrix3::from_columns(&[de1, de2, dn])
+        } else {
+            let z = Vector3::z();
+            Matrix3::from_columns(&[de1, z.cross(&de1), z * (self.e1.dot(&de1) / self.a)])
+        }
+    }
+
+    /// The element size's (area of a triangle, length of a segment) derivative for the
+    /// perturbation of coordinate `b` of point `a` by 1.
+    fn size_along(&self, a: usize, b: usize) -> f64 {
+        let mut dp = [Vector3::zeros(); 3];
+        dp[a][b] = 1.0;
+        let de1 = dp[1] - dp[0];
+        if self.tri {
+            let de2 = dp[2] - dp[0];
+            0.5 * self.c.dot(&(de1.cross(&self.e2) + self.e1.cross(&de2))) / self.a
+        } else {
+            self.e1.dot(&de1) / self.a
+        }
     }
 }
 
-/// The quaternion of R and its derivative for dR = R [ω]×.
-fn quat_d(r: &Matrix3<f64>, omega: Vector3<f64>) -> ([f64; 4], [f64; 4]) {
-    let q = quat(r);
+/// The quaternion q = (v, w) of R and its derivative for dR = R [ω]×.
+fn quat_d(q: [f64; 4], omega: Vector3<f64>) -> [f64; 4] {
     let v = Vector3::new(q[0], q[1], q[2]);
     let dv = (omega * q[3] + v.cross(&omega)) * 0.5;
-    (q, [dv.x, dv.y, dv.z, -0.5 * v.dot(&omega)])
+    [dv.x, dv.y, dv.z, -0.5 * v.dot(&omega)]
 }
 
-/// The rotation derivative ω of the polar factor R of X for dX (R and H = Rᵀ X given).
-fn polar_d(r: &Matrix3<f64>, h: &Matrix3<f64>, dx: &Matrix3<f64>) -> Vector3<f64> {
+/// The rotation derivative ω of the polar factor R of X for dX, with `gi` the inverse of
+/// tr H · I − H (H = Rᵀ X; None: singular, ω = 0).
+fn polar_d(r: &Matrix3<f64>, gi: Option<&Matrix3<f64>>, dx: &Matrix3<f64>) -> Vector3<f64> {
     let m = r.transpose() * dx;
     let k = m - m.transpose();
     let rhs = Vector3::new(k[(2, 1)], k[(0, 2)], k[(1, 0)]);
-    let g = Matrix3::identity() * h.trace() - h;
-    g.try_inverse().map_or_else(Vector3::zeros, |gi| gi * rhs)
+    gi.map_or_else(Vector3::zeros, |gi| gi * rhs)
 }
 
 /// The derivative of size · q of the skin element at the start points `pc` (frame inverse
@@ -91,31 +127,29 @@ pub(crate) fn skin_jacobian(
     plane: bool,
 ) -> Option<SkinJac> {
     let k = pc.len();
-    let st = frame(pt)?;
+    let (st, ft) = FrameD::new(pt)?;
+    let (_, fc) = FrameD::new(pc)?;
     let x = st * inv0;
     let r = nearest_rotation(&x);
     let h = r.transpose() * x;
     let h = (h + h.transpose()) * 0.5;
+    // Shared by every column: tr H · I − H inverted, the quaternion of R.
+    let gi = (Matrix3::identity() * h.trace() - h).try_inverse();
+    let q0 = quat(&r);
     let mut jac = [[0.0; 4]; 18];
-    let zero = [[0.0; 3]; 3];
     for col in 0..18 {
         let (a, b) = ((col % 9) / 3, col % 3);
         if a >= k {
             continue;
         }
-        let mut dp = zero;
-        dp[a][b] = 1.0;
-        let at_end = col < 9;
         // dX = (dS − X dS̄) S̄⁻¹; the size depends on the start points only.
-        let (dx, dsize) = if at_end {
-            let (_, ds) = frame_d(pt, &dp[..k])?;
-            (ds * inv0, 0.0)
+        let (dx, dsize) = if col < 9 {
+            (ft.along(a, b) * inv0, 0.0)
         } else {
-            let (_, ds0) = frame_d(pc, &dp[..k])?;
-            (-(x * ds0) * inv0, size_d(pc, &dp[..k]))
+            (-(x * fc.along(a, b)) * inv0, fc.size_along(a, b))
         };
-        let omega = polar_d(&r, &h, &dx);
-        let (mut q, mut dq) = quat_d(&r, omega);
+        let omega = polar_d(&r, gi.as_ref(), &dx);
+        let (mut q, mut dq) = (q0, quat_d(q0, omega));
         if plane {
             let l = (q[2] * q[2] + q[3] * q[3]).sqrt();
             let (qz, qw) = (q[2] / l, q[3] / l);

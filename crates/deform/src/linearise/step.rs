@@ -85,6 +85,40 @@ fn for_neighbours(
     }
 }
 
+/// The couplings to prescribed nodes transposed: per node, its unknown neighbours (unknown
+/// index, K) in increasing unknown order (empty for unknown nodes).
+struct CouplingsT {
+    offsets: Vec<usize>,
+    entries: Vec<(u32, f64)>,
+}
+
+impl CouplingsT {
+    fn new(op: &Operator, sys: &crate::assembly::System, n: usize) -> Self {
+        let cp = &op.couplings;
+        let mut offsets = vec![0usize; n + 1];
+        for &j in &cp.cols {
+            offsets[j as usize + 1] += 1;
+        }
+        for i in 0..n {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut next = offsets.clone();
+        let mut entries = vec![(0u32, 0.0); cp.cols.len()];
+        for k in 0..sys.node_of.len() {
+            let (nodes, kij) = cp.row(k);
+            for (&j, &kv) in nodes.iter().zip(kij) {
+                entries[next[j as usize]] = (k as u32, kv);
+                next[j as usize] += 1;
+            }
+        }
+        Self { offsets, entries }
+    }
+
+    fn row(&self, m: usize) -> &[(u32, f64)] {
+        &self.entries[self.offsets[m]..self.offsets[m + 1]]
+    }
+}
+
 fn add(a: &mut V3, f: f64, b: V3) {
     for q in 0..3 {
         a[q] += f * b[q];
@@ -481,48 +515,62 @@ impl Step {
                     v[2] = 0.0;
                 }
             }
-            // The transpose of db.
+            // The transpose of db, gathered per node (A is symmetric: node m forms the terms
+            // every neighbour's row sends it; in parallel, each node's sum in its own
+            // neighbour order, so independent of the thread count).
+            let ct = CouplingsT::new(op, sys, n);
+            let bof = |j: usize| match sys.unk_of[j] {
+                u32::MAX => [0.0; 3],
+                u => bbar[u as usize],
+            };
             let mut qbar = vec![[0.0f64; 4]; n];
-            for k in 0..nu {
-                let i = sys.node_of[k] as usize;
-                let bk = bbar[k];
-                for_neighbours(op, sys, k, |j, kij, uj| {
-                    if uj.is_none() {
-                        add(&mut tbar[j], kij, bk);
-                    }
-                    let dcij = sub(self.c[j], self.c[i]);
-                    if self.rot {
-                        let qb = qsum(self.q[i], self.q[j]);
-                        let g =
-                            rot_apply_dq_t(qb, dcij, [-kij * bk[0], -kij * bk[1], -kij * bk[2]]);
-                        for t in 0..4 {
-                            qbar[i][t] += g[t];
-                            qbar[j][t] += g[t];
+            qbar.par_iter_mut()
+                .zip(cbar.par_iter_mut())
+                .zip(tbar.par_iter_mut())
+                .enumerate()
+                .with_min_len(CHUNK)
+                .for_each(|(m, ((qm, cm), tm))| {
+                    let bm = bof(m);
+                    let mut edge = |j: usize, k: f64| {
+                        let db = sub(bm, bof(j));
+                        let dcmj = sub(self.c[j], self.c[m]);
+                        if self.rot {
+                            let qb = qsum(self.q[m], self.q[j]);
+                            let g = rot_apply_dq_t(qb, dcmj, [-k * db[0], -k * db[1], -k * db[2]]);
+                            for t in 0..4 {
+                                qm[t] += g[t];
+                            }
                         }
-                    }
-                    if !self.first {
-                        let rt = if self.rot {
-                            super::edge::rot_apply_t(qsum(self.q[i], self.q[j]), bk)
-                        } else {
-                            bk
-                        };
-                        add(&mut cbar[j], -kij, rt);
-                        add(&mut cbar[i], kij, rt);
-                        let r = self.edge_rot(i, j, dcij);
-                        let e = sub(self.y[i], self.y[j]);
-                        let kb = -dot(bk, [e[0] + r[0], e[1] + r[1], e[2] + r[2]]);
-                        let g = dk_t(kij, self.power, dcij, kb);
-                        add(&mut cbar[j], 1.0, g);
-                        add(&mut cbar[i], -1.0, g);
+                        if !self.first {
+                            let rt = if self.rot {
+                                super::edge::rot_apply_t(qsum(self.q[m], self.q[j]), db)
+                            } else {
+                                db
+                            };
+                            add(cm, k, rt);
+                            let r = self.edge_rot(m, j, dcmj);
+                            let e = sub(self.y[m], self.y[j]);
+                            let kb = -dot(db, [e[0] + r[0], e[1] + r[1], e[2] + r[2]]);
+                            add(cm, -1.0, dk_t(k, self.power, dcmj, kb));
+                        }
+                    };
+                    match sys.unk_of[m] {
+                        u32::MAX => {
+                            for &(u, k) in ct.row(m) {
+                                add(tm, k, bbar[u as usize]);
+                                edge(sys.node_of[u as usize] as usize, k);
+                            }
+                        }
+                        u => for_neighbours(op, sys, u as usize, |j, k, _| edge(j, k)),
                     }
                 });
-            }
             if self.rot {
                 // Eq. 26: the unknowns' quaternion weights to their vector parts, the adjoint
                 // solve, then its right-hand side transposed.
                 let ubar: Vec<V3> = sys
                     .node_of
-                    .iter()
+                    .par_iter()
+                    .with_min_len(CHUNK)
                     .map(|&i| {
                         let i = i as usize;
                         blend_d_t(self.q[i], qbar[i], weight_at(&d.reach, i))
@@ -539,44 +587,64 @@ impl Step {
                 );
                 check(&rep, "adjoint of Eq. 26", rel_tol)?;
                 iterations += rep.iterations;
-                for k in 0..nu {
-                    let i = sys.node_of[k] as usize;
-                    let zk = z[k];
-                    for_neighbours(op, sys, k, |j, kij, uj| {
-                        if uj.is_none() {
-                            for t in 0..3 {
-                                qbar[j][t] += kij * zk[t];
+                // Gathered per node as above: z and the unknowns' u (the prescribed nodes'
+                // quaternion vector parts) per node, zero z on prescribed nodes.
+                let zof = |j: usize| match sys.unk_of[j] {
+                    u32::MAX => ([0.0; 3], [self.q[j][0], self.q[j][1], self.q[j][2]]),
+                    u => (z[u as usize], self.u26[u as usize]),
+                };
+                qbar.par_iter_mut()
+                    .zip(cbar.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(CHUNK)
+                    .for_each(|(m, (qm, cm))| {
+                        let (zm, vm) = zof(m);
+                        let mut edge = |j: usize, k: f64| {
+                            if !self.first {
+                                let (zj, vj) = zof(j);
+                                let kb = -dot(sub(zm, zj), sub(vm, vj));
+                                let g = dk_t(k, self.power, sub(self.c[j], self.c[m]), kb);
+                                add(cm, -1.0, g);
+                            }
+                        };
+                        match sys.unk_of[m] {
+                            u32::MAX => {
+                                for &(u, k) in ct.row(m) {
+                                    let zu = z[u as usize];
+                                    for t in 0..3 {
+                                        qm[t] += k * zu[t];
+                                    }
+                                    edge(sys.node_of[u as usize] as usize, k);
+                                }
+                            }
+                            u => {
+                                if !self.first {
+                                    for_neighbours(op, sys, u as usize, |j, k, _| edge(j, k));
+                                }
                             }
                         }
-                        if !self.first {
-                            let vj = match uj {
-                                Some(u) => self.u26[u],
-                                None => [self.q[j][0], self.q[j][1], self.q[j][2]],
-                            };
-                            let kb = -dot(zk, sub(self.u26[k], vj));
-                            let g = dk_t(kij, self.power, sub(self.c[j], self.c[i]), kb);
-                            add(&mut cbar[j], 1.0, g);
-                            add(&mut cbar[i], -1.0, g);
-                        }
                     });
-                }
                 // The skin nodes' blend (the reach), normalisation, then the elements.
-                let mut accbar = vec![[0.0f64; 4]; n];
-                for i in 0..n {
-                    let l = self.node_len[i];
-                    if l > 0.0 {
+                let accbar: Vec<[f64; 4]> = (0..n)
+                    .into_par_iter()
+                    .with_min_len(CHUNK)
+                    .map(|i| {
+                        let l = self.node_len[i];
+                        if l == 0.0 {
+                            return [0.0; 4];
+                        }
                         let phi = weight_at(&d.reach, i);
-                        if phi != 1.0 {
+                        let a = if phi == 1.0 {
+                            qbar[i]
+                        } else {
                             let v = blend_d_t(self.q[i], qbar[i], phi);
-                            qbar[i] = [v[0], v[1], v[2], 0.0];
-                        }
-                        let (a, qh) = (qbar[i], self.node_q[i]);
+                            [v[0], v[1], v[2], 0.0]
+                        };
+                        let qh = self.node_q[i];
                         let p: f64 = (0..4).map(|t| qh[t] * a[t]).sum();
-                        for t in 0..4 {
-                            accbar[i][t] = (a[t] - qh[t] * p) / l;
-                        }
-                    }
-                }
+                        std::array::from_fn(|t| (a[t] - qh[t] * p) / l)
+                    })
+                    .collect();
                 for (e, jac) in d.cls.skin.iter().zip(&self.skin) {
                     let Some(jac) = jac else { continue };
                     let mut g = [0.0; 4];
