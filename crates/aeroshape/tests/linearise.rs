@@ -233,3 +233,48 @@ fn init_fuselage_variables_match_central_differences() {
         }
     }
 }
+
+/// `Study::linearise` just after `Study::evaluate` at the same x reuses that evaluation (an
+/// optimiser evaluates first): the linearisation is at the evaluation's grid bit for bit (a
+/// warm-started one, which a cold evaluation does not reproduce bit for bit), and its
+/// products agree with those of a linearisation that evaluated x itself to the solvers'
+/// tolerance.
+#[test]
+fn linearise_after_evaluate_reuses_the_evaluation() {
+    let dir = case_dir("default");
+    let s = Study::load(&dir.join("case.ron")).expect("study");
+    assert!(s.case().deform.warm_start, "the default case warm-starts");
+    let x = s
+        .vector_from_values(&load_design_values(&dir.join("dv.ron")).expect("dv"))
+        .expect("design vector");
+    let step: Vec<f64> = x.iter().map(|v| 1.01 * v).collect();
+    s.evaluate(&step).unwrap();
+    // warm-started from the step's solution
+    let ev = s.evaluate(&x).unwrap();
+    let reused = s.linearise(&x).unwrap();
+    assert!(reused.coords() == ev.grid.coords.as_slice());
+    assert!(reused.surface().coords == ev.surface.coords);
+    // the last evaluation elsewhere: x evaluated cold by the linearisation
+    s.evaluate(&step).unwrap();
+    let cold = s.linearise(&x).unwrap();
+    assert!(
+        cold.coords() != ev.grid.coords.as_slice(),
+        "warm and cold differ"
+    );
+    let n = s.baseline().n_nodes();
+    let mut r = rng(7);
+    let w: Vec<[f64; 3]> = (0..n).map(|_| [r(), r(), r()]).collect();
+    let (a, b) = (reused.vjp(&w).unwrap(), cold.vjp(&w).unwrap());
+    let diff = a
+        .iter()
+        .zip(&b)
+        .map(|(p, q)| (p - q).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let scale = b.iter().map(|q| q * q).sum::<f64>().sqrt();
+    eprintln!(
+        "reused against cold: |Δ gradient| / |gradient| = {:.2e}",
+        diff / scale
+    );
+    assert!(scale > 0.0 && diff < 1e-6 * scale, "{diff:e} of {scale:e}");
+}

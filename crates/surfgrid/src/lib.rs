@@ -44,4 +44,4 @@ pub use grid::{ComponentGrid, NodeSupport, PoleCopy, SurfaceGrid};
 pub use linearise::SurfaceLinearisation;
 pub use spacing::SizeField;
 pub use stats::{GridStats, grid_stats};
-pub use update::{UpdateOptions, UpdateReport, Updater, evaluate_frozen, update};
+pub use update::{UpdateOptions, UpdateRecord, UpdateReport, Updater, evaluate_frozen, update};

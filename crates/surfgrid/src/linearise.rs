@@ -34,7 +34,7 @@ use geom_db::{CurveId, GeomDb, SurfaceId};
 use crate::error::{Error, Result};
 use crate::grid::{NodeSupport, SurfaceGrid};
 use crate::harmonic::HarmonicMap;
-use crate::update::{UpdateOptions, UpdateReport, Updater};
+use crate::update::{UpdateOptions, UpdateRecord, UpdateReport, Updater};
 
 /// A curve node: its curve, final parameter t′, r′(t′), component and frozen fraction s.
 #[derive(Debug, Clone)]
@@ -165,8 +165,31 @@ impl Updater {
         new: &GeomDb,
         opts: &UpdateOptions,
     ) -> Result<(SurfaceGrid, UpdateReport, SurfaceLinearisation<'u>)> {
-        let mut moves = Vec::new();
-        let (out, report) = self.update_recorded(grid, old, new, opts, &mut moves)?;
+        let (out, report, record) = self.update_recorded(grid, old, new, opts)?;
+        let lin = self.linearise_recorded(grid, old, new, &out, &record)?;
+        Ok((out, report, lin))
+    }
+
+    /// The linearisation of an update already made: `out` and `record` are what
+    /// [`Updater::update_recorded`] returned for `grid`, `old` and `new` (the update is not
+    /// run again).
+    pub fn linearise_recorded<'u>(
+        &'u self,
+        grid: &SurfaceGrid,
+        old: &GeomDb,
+        new: &GeomDb,
+        out: &SurfaceGrid,
+        record: &UpdateRecord,
+    ) -> Result<SurfaceLinearisation<'u>> {
+        let moves = &record.moves;
+        if out.components.len() != grid.components.len()
+            || out.coords.len() != grid.coords.len()
+            || moves.len() != grid.components.len()
+        {
+            return Err(Error::Mismatch {
+                what: "an update record of another grid".into(),
+            });
+        }
         let mut corners = Vec::new();
         let mut curves = Vec::new();
         for (i, (s0, s1)) in grid.support.iter().zip(&out.support).enumerate() {
@@ -210,7 +233,7 @@ impl Updater {
             }
             let uv: Vec<[f64; 2]> = oc.uv[nb..].to_vec();
             let derivs = uv.iter().map(|p| surf.derivs(p[0], p[1])).collect();
-            let moves = std::mem::take(&mut moves[ci]);
+            let moves = moves[ci].clone();
             let (adj_ptr, adj) = if moves.is_empty() {
                 (Vec::new(), Vec::new())
             } else {
@@ -229,14 +252,13 @@ impl Updater {
                 derivs,
             });
         }
-        let lin = SurfaceLinearisation {
+        Ok(SurfaceLinearisation {
             model: new.clone(),
             n_nodes: grid.n_nodes(),
             corners,
             curves,
             comps,
-        };
-        Ok((out, report, lin))
+        })
     }
 }
 

@@ -124,6 +124,13 @@ pub fn update(
     Updater::new(grid).update(grid, old, new, opts)
 }
 
+/// What one update recorded for its linearisation ([`Updater::update_recorded`]): per
+/// component, the smoothing moves (node, fraction) in the order made.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct UpdateRecord {
+    pub(crate) moves: Vec<Vec<(u32, f64)>>,
+}
+
 /// The reusable part of [`update`] for one grid: each component's harmonic re-map,
 /// factorised the first time the component is re-mapped and kept for later updates. The
 /// answer is bit for bit that of [`update`].
@@ -182,17 +189,19 @@ impl Updater {
         self.run(grid, old, new, opts, None)
     }
 
-    /// [`update`](Self::update) recording, per component, the smoothing moves it made (see
-    /// [`crate::linearise`]).
-    pub(crate) fn update_recorded(
+    /// [`update`](Self::update), also returning what [`Updater::linearise_recorded`] needs
+    /// to linearise it (per component, the smoothing moves it made; see
+    /// [`crate::linearise`]). The grid and report are [`update`](Self::update)'s, bit for bit.
+    pub fn update_recorded(
         &self,
         grid: &SurfaceGrid,
         old: &GeomDb,
         new: &GeomDb,
         opts: &UpdateOptions,
-        moves: &mut Vec<Vec<(u32, f64)>>,
-    ) -> Result<(SurfaceGrid, UpdateReport)> {
-        self.run(grid, old, new, opts, Some(moves))
+    ) -> Result<(SurfaceGrid, UpdateReport, UpdateRecord)> {
+        let mut moves = Vec::new();
+        let (out, report) = self.run(grid, old, new, opts, Some(&mut moves))?;
+        Ok((out, report, UpdateRecord { moves }))
     }
 
     fn run(

@@ -14,12 +14,13 @@ use surfgrid::SurfaceGrid;
 
 use super::error::Result;
 use super::report::{DeformPhase, ModelPhase, ParamPhase, Quality, Report, SurfacePhase};
-use super::{Evaluation, Study};
+use super::{EvaluatedAt, Evaluation, Study};
 
-/// Stage 4's result: the deformed node coordinates with their cell quality (`None` when no
-/// wall node moved: the baseline grid is the solution).
+/// Stage 4's result: the deformed node coordinates with their cell quality and the
+/// deformation's result (coordinates and quality taken out; `None` when no wall node moved:
+/// the baseline grid is the solution).
 struct Volume {
-    deformed: Option<(Vec<[f64; 3]>, Vec<f64>, Quality)>,
+    deformed: Option<(Vec<[f64; 3]>, Vec<f64>, Quality, Arc<deform::Deformed>)>,
     phase: DeformPhase,
 }
 
@@ -45,16 +46,16 @@ impl Study {
         progress("model update");
         let (geometry, model) = self.update_model(&points)?;
         progress("surface grid");
-        let (surface, surface_phase) = self.update_surface(&geometry)?;
+        let (surface, surface_phase, record) = self.update_surface(&geometry)?;
         progress("deform");
         let volume = self.deform_volume(&surface)?;
         let mut grid = self.grid.clone();
-        let (cell_quality, quality_after) = match volume.deformed {
-            Some((coords, q, summary)) => {
+        let (cell_quality, quality_after, deformed) = match volume.deformed {
+            Some((coords, q, summary, d)) => {
                 grid.coords = coords;
-                (q, summary)
+                (q, summary, Some(d))
             }
-            None => (self.quality.clone(), self.quality_before),
+            None => (self.quality.clone(), self.quality_before, None),
         };
         surface.write_params(&mut grid);
         let wall_support_rel = self.wall_support(&geometry, &surface, &grid);
@@ -80,6 +81,15 @@ impl Study {
             quality_after,
             wall_support_rel,
         };
+        // Kept for a linearisation at the same x (`Study::linearise`).
+        *self.recent.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::new(EvaluatedAt {
+            x: x.to_vec(),
+            geometry: geometry.clone(),
+            surface: surface.clone(),
+            record,
+            deformed,
+            coords: grid.coords.clone(),
+        }));
         Ok(Evaluation {
             geometry,
             grid,
@@ -117,10 +127,14 @@ impl Study {
         Ok((geometry, phase))
     }
 
-    /// Stage 3 (§3.3): the wall nodes at their frozen parameters on the new geometry.
-    fn update_surface(&self, geometry: &GeomDb) -> Result<(SurfaceGrid, SurfacePhase)> {
+    /// Stage 3 (§3.3): the wall nodes at their frozen parameters on the new geometry, and
+    /// what the update's linearisation needs of it.
+    fn update_surface(
+        &self,
+        geometry: &GeomDb,
+    ) -> Result<(SurfaceGrid, SurfacePhase, surfgrid::UpdateRecord)> {
         let t = Instant::now();
-        let (surface, r) = self.surface_updater.update(
+        let (surface, r, record) = self.surface_updater.update_recorded(
             &self.surface,
             &self.db,
             geometry,
@@ -129,16 +143,15 @@ impl Study {
         Ok((
             surface,
             SurfacePhase::from_update(&r, t.elapsed().as_secs_f64()),
+            record,
         ))
     }
 
-    /// Stage 4 (§4): the volume grid deformed with the wall nodes prescribed at their new
-    /// positions and the fixed nodes where they are; skipped when no wall node moved.
-    fn deform_volume(&self, surface: &SurfaceGrid) -> Result<Volume> {
-        let t = Instant::now();
-        // Prescribed positions in the order of the set-up's boundary conditions
-        // (`setup::deform_bc`): the wall nodes at their new place on the geometry, then the
-        // nodes of `fixed` markers where they are.
+    /// The prescribed positions of the volume deformation for the wall grid `surface`, in
+    /// the order of the set-up's boundary conditions (`setup::deform_bc`): the wall nodes at
+    /// their new place on the geometry, then the nodes of `fixed` markers where they are;
+    /// and whether a wall node moved.
+    pub(super) fn prescribed(&self, surface: &SurfaceGrid) -> (Vec<[f64; 3]>, bool) {
         let mut positions = Vec::with_capacity(self.deformer.n_displacements());
         let mut any = false;
         for (i, w) in self.wall.iter().enumerate() {
@@ -153,6 +166,14 @@ impl Study {
                 .iter()
                 .map(|&v| self.grid.coords[v as usize]),
         );
+        (positions, any)
+    }
+
+    /// Stage 4 (§4): the volume grid deformed with the wall nodes prescribed at their new
+    /// positions and the fixed nodes where they are; skipped when no wall node moved.
+    fn deform_volume(&self, surface: &SurfaceGrid) -> Result<Volume> {
+        let t = Instant::now();
+        let (positions, any) = self.prescribed(surface);
         if !any {
             // The solution is Δx = 0: the next evaluation starts cold.
             self.forget_warm_start();
@@ -186,12 +207,14 @@ impl Study {
             skipped: false,
             report: Some(d.report.clone()),
         };
+        // Kept for its solver state only (coordinates and quality taken above): the warm
+        // start of the next evaluation, and the linearisation at x.
+        let d = Arc::new(d);
         if warm_start {
-            // Kept for its solver state only (coordinates and quality taken above).
-            *self.last.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::new(d));
+            *self.last.lock().unwrap_or_else(PoisonError::into_inner) = Some(d.clone());
         }
         Ok(Volume {
-            deformed: Some((coords, quality, summary)),
+            deformed: Some((coords, quality, summary, d)),
             phase,
         })
     }

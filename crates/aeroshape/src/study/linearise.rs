@@ -17,13 +17,19 @@
 //! solve for the whole gradient). The wall variants stop after (start at) the surface grid,
 //! for a solver that gives only surface sensitivities.
 //!
-//! The linearisation's deformation starts cold (never from the warm start), so it belongs to
-//! x alone; its solves and the products' run to the case's `deform.rel_tol`.
+//! When the study's last evaluation was at x (an optimiser evaluates first: the flow solver
+//! needs the grid), [`Study::linearise`] reuses it — the updated model, the wall grid and
+//! its update's record, the volume deformation — and only linearises; the linearisation is
+//! then at the grid that evaluation returned. Otherwise it evaluates the chain at x with the
+//! deformation started cold (never from the warm start), so the result belongs to x alone.
+//! The deformation's solves and the products' run to the case's `deform.rel_tol`.
+
+use std::sync::{Arc, PoisonError};
 
 use geom_db::prelude::Vector3;
 
-use super::Study;
 use super::error::{Result, StudyError};
+use super::{EvaluatedAt, Study};
 use geom_db::GeomDb;
 use surfgrid::SurfaceGrid;
 
@@ -35,9 +41,7 @@ pub struct ChainLinearisation<'s> {
     model: intersect::update::ModelLinearisation,
     surface: surfgrid::SurfaceLinearisation<'s>,
     deform: deform::Linearisation<'s, 'static>,
-    geometry: GeomDb,
-    surface_grid: SurfaceGrid,
-    coords: Vec<[f64; 3]>,
+    at: Arc<EvaluatedAt>,
 }
 
 impl std::fmt::Debug for ChainLinearisation<'_> {
@@ -104,7 +108,8 @@ fn norm3(v: &[[f64; 3]]) -> f64 {
 }
 
 impl Study {
-    /// Evaluates the chain at `x` and linearises every phase there (module doc). The
+    /// Linearises every phase of the chain at `x` (module doc): at the last evaluation when
+    /// it was at `x` (reused, not run again), otherwise at a cold evaluation made here. The
     /// products of the result can be taken as many times as wanted.
     pub fn linearise(&self, x: &[f64]) -> Result<ChainLinearisation<'_>> {
         let reg = self.prepared.registry();
@@ -116,38 +121,65 @@ impl Study {
             .into());
         }
         let (points, jac) = self.prepared.apply_with_jacobian(x)?;
-        let (geometry, _) = self.model.update(&points)?;
-        let model = self.model.linearise(&points, &geometry)?;
-        let (surface, _, surface_lin) = self.surface_updater.linearise(
+        let recent = self
+            .recent
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .clone()
+            .filter(|r| r.x == x);
+        let at = match recent {
+            Some(r) => r,
+            None => Arc::new(self.evaluate_cold(x, &points)?),
+        };
+        let model = self.model.linearise(&points, &at.geometry)?;
+        let surface = self.surface_updater.linearise_recorded(
             &self.surface,
             &self.db,
-            &geometry,
-            &self.case.surface_grid.update_options(),
+            &at.geometry,
+            &at.surface,
+            &at.record,
         )?;
-        let mut positions = Vec::with_capacity(self.deformer.n_displacements());
-        for (i, w) in self.wall.iter().enumerate() {
-            if *w {
-                let p = surface.coords[i];
-                positions.push([p.x, p.y, p.z]);
+        let deform = match &at.deformed {
+            Some(d) => self.deformer.linearise(d)?,
+            None => {
+                // No wall node moved: the deformation is the identity, linearised there.
+                let (positions, _) = self.prescribed(&at.surface);
+                self.deformer
+                    .linearise(&self.deformer.deform_to(&positions, None)?)?
             }
-        }
-        positions.extend(
-            self.fixed_nodes
-                .iter()
-                .map(|&v| self.grid.coords[v as usize]),
-        );
-        let d = self.deformer.deform_to(&positions, None)?;
-        let deform = self.deformer.linearise(&d)?;
+        };
         Ok(ChainLinearisation {
             study: self,
             x: x.to_vec(),
             jac,
             model,
-            surface: surface_lin,
+            surface,
             deform,
+            at,
+        })
+    }
+
+    /// The chain at `x` for its linearisation (control nodes `points`), the deformation
+    /// started cold.
+    fn evaluate_cold(&self, x: &[f64], points: &[geom_db::prelude::Point3]) -> Result<EvaluatedAt> {
+        let (geometry, _) = self.model.update(points)?;
+        let (surface, _, record) = self.surface_updater.update_recorded(
+            &self.surface,
+            &self.db,
+            &geometry,
+            &self.case.surface_grid.update_options(),
+        )?;
+        let (positions, _) = self.prescribed(&surface);
+        let mut d = self.deformer.deform_to(&positions, None)?;
+        let coords = std::mem::take(&mut d.coords);
+        d.cell_quality = Vec::new();
+        Ok(EvaluatedAt {
+            x: x.to_vec(),
             geometry,
-            surface_grid: surface,
-            coords: d.coords,
+            surface,
+            record,
+            deformed: Some(Arc::new(d)),
+            coords,
         })
     }
 
@@ -226,17 +258,18 @@ impl ChainLinearisation<'_> {
 
     /// The updated model at x.
     pub fn geometry(&self) -> &GeomDb {
-        &self.geometry
+        &self.at.geometry
     }
 
     /// The updated wall grid at x.
     pub fn surface(&self) -> &SurfaceGrid {
-        &self.surface_grid
+        &self.at.surface
     }
 
-    /// The deformed grid's coordinates at x (the deformation started cold).
+    /// The deformed grid's coordinates at x (the last evaluation's when it was at x,
+    /// otherwise the deformation started cold).
     pub fn coords(&self) -> &[[f64; 3]] {
-        &self.coords
+        &self.at.coords
     }
 
     /// The number of increments of the deformation differentiated.

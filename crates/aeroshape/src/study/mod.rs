@@ -88,6 +88,23 @@ pub struct Evaluation {
     pub report: Report,
 }
 
+/// What one evaluation at `x` computed that [`Study::linearise`] at the same `x` reuses
+/// instead of evaluating again.
+pub(crate) struct EvaluatedAt {
+    /// The design vector.
+    x: Vec<f64>,
+    /// The updated model.
+    geometry: GeomDb,
+    /// The updated wall grid and what its update recorded for its linearisation.
+    surface: SurfaceGrid,
+    record: surfgrid::UpdateRecord,
+    /// The volume deformation (coordinates and quality taken out; None: no wall node moved,
+    /// the baseline grid is the answer).
+    deformed: Option<Arc<deform::Deformed>>,
+    /// The deformed grid's coordinates.
+    coords: Vec<[f64; 3]>,
+}
+
 /// The pipeline built once from a case; see the module doc.
 pub struct Study {
     case: Case,
@@ -107,6 +124,8 @@ pub struct Study {
     deformer: deform::Deformer<'static>,
     /// The last volume deformation, the warm start of the next one (None: start cold).
     last: Mutex<Option<Arc<deform::Deformed>>>,
+    /// The last evaluation's results, reused by [`Study::linearise`] at the same x.
+    recent: Mutex<Option<Arc<EvaluatedAt>>>,
     quality: Vec<f64>,
     quality_before: Quality,
     setup: SetupReport,
