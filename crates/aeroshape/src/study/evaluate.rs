@@ -16,12 +16,19 @@ use super::error::Result;
 use super::report::{DeformPhase, ModelPhase, ParamPhase, Quality, Report, SurfacePhase};
 use super::{EvaluatedAt, Evaluation, Study};
 
-/// Stage 4's result: the deformed node coordinates with their cell quality and the
-/// deformation's result (coordinates and quality taken out; `None` when no wall node moved:
-/// the baseline grid is the solution).
+/// Stage 4's result (`None` when no wall node moved: the baseline grid is the solution).
 struct Volume {
-    deformed: Option<(Vec<[f64; 3]>, Vec<f64>, Quality, Arc<deform::Deformed>)>,
+    deformed: Option<Moved>,
     phase: DeformPhase,
+}
+
+/// A deformation's outcome: the node coordinates, the cell quality and its summary, and the
+/// deformation's result (coordinates and quality taken out).
+struct Moved {
+    coords: Vec<[f64; 3]>,
+    quality: Vec<f64>,
+    summary: Quality,
+    result: Arc<deform::Deformed>,
 }
 
 impl Study {
@@ -51,9 +58,9 @@ impl Study {
         let volume = self.deform_volume(&surface)?;
         let mut grid = self.grid.clone();
         let (cell_quality, quality_after, deformed) = match volume.deformed {
-            Some((coords, q, summary, d)) => {
-                grid.coords = coords;
-                (q, summary, Some(d))
+            Some(m) => {
+                grid.coords = m.coords;
+                (m.quality, m.summary, Some(m.result))
             }
             None => (self.quality.clone(), self.quality_before, None),
         };
@@ -214,7 +221,12 @@ impl Study {
             *self.last.lock().unwrap_or_else(PoisonError::into_inner) = Some(d.clone());
         }
         Ok(Volume {
-            deformed: Some((coords, quality, summary, d)),
+            deformed: Some(Moved {
+                coords,
+                quality,
+                summary,
+                result: d,
+            }),
             phase,
         })
     }
