@@ -118,44 +118,13 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     )?;
     let ev = study.evaluate_with_progress(&x, &mut |p| eprintln!("[run] {p}"))?;
     let r = &ev.report;
-    eprintln!(
-        "[run] writing {} (evaluation {:.2} s)",
-        a.output.display(),
-        r.seconds
-    );
-    let mut written = Vec::new();
-    let mut put = |name: &str, f: &dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()>| {
-        let p = out(name);
-        write_atomic(&p, |w| f(w))?;
-        written.push(p.display().to_string());
-        anyhow::Ok(())
-    };
-    put("deformed.su2", &|w| {
-        mesh::io::write(&ev.grid, Format::Su2, w)
-    })?;
-    put("deformed.msh", &|w| {
-        mesh::io::write(&ev.grid, Format::Msh(Encoding::Ascii), w)
-    })?;
-    put("deformed.vtu", &|w| {
-        mesh::io::write(
-            &ev.grid,
-            Format::from_path(Path::new("a.vtu")).expect("vtu"),
-            w,
-        )
-    })?;
-    put("baseline.su2", &|w| {
-        mesh::io::write(study.baseline(), Format::Su2, w)
-    })?;
-    put("geometry.ron", &|w| ev.geometry.write_ron(w))?;
-    if !a.no_pictures {
-        let before = (study.geometry(), study.baseline_quality());
-        pictures(
-            before,
-            (&ev.geometry, &ev.cell_quality),
-            &a.output,
-            &mut written,
-        )?;
-    }
+    let mut written = write_outputs(
+        &a.output,
+        r.seconds,
+        (study.baseline(), study.geometry(), study.baseline_quality()),
+        (&ev.grid, &ev.geometry, &ev.cell_quality),
+        !a.no_pictures,
+    )?;
     let report_path = out("report.json");
     written.push(report_path.display().to_string());
     let rr = RunReport {
@@ -214,6 +183,49 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
 /// The PNG pictures: quality histogram before/after, wing planform and key sections
 /// before/after (the wing: components whose name starts with "wing"; sections at 20 %, 50 %
 /// and 98 % of its span).
+/// Writes a run's files into `dir`, each to a temporary name then renamed: the deformed grid
+/// (`.su2`, `.msh`, `.vtu`), the baseline grid, the updated geometry, and unless
+/// `pictures_too` is false the pictures. Returns the paths written, for `report.json`.
+pub(crate) fn write_outputs(
+    dir: &Path,
+    seconds: f64,
+    (baseline, geometry0, quality0): (&mesh::Mesh, &GeomDb, &[f64]),
+    (grid, geometry, quality): (&mesh::Mesh, &GeomDb, &[f64]),
+    pictures_too: bool,
+) -> anyhow::Result<Vec<String>> {
+    eprintln!(
+        "[run] writing {} (evaluation {seconds:.2} s)",
+        dir.display()
+    );
+    let mut written = Vec::new();
+    let mut put = |name: &str, f: &dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()>| {
+        let p = dir.join(name);
+        write_atomic(&p, |w| f(w))?;
+        written.push(p.display().to_string());
+        anyhow::Ok(())
+    };
+    put("deformed.su2", &|w| mesh::io::write(grid, Format::Su2, w))?;
+    put("deformed.msh", &|w| {
+        mesh::io::write(grid, Format::Msh(Encoding::Ascii), w)
+    })?;
+    put("deformed.vtu", &|w| {
+        mesh::io::write(grid, Format::from_path(Path::new("a.vtu")).expect("vtu"), w)
+    })?;
+    put("baseline.su2", &|w| {
+        mesh::io::write(baseline, Format::Su2, w)
+    })?;
+    put("geometry.ron", &|w| geometry.write_ron(w))?;
+    if pictures_too {
+        pictures(
+            (geometry0, quality0),
+            (geometry, quality),
+            dir,
+            &mut written,
+        )?;
+    }
+    Ok(written)
+}
+
 pub(crate) fn pictures(
     (baseline, quality_before): (&GeomDb, &[f64]),
     (geometry, quality_after): (&GeomDb, &[f64]),

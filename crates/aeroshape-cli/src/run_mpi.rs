@@ -10,8 +10,6 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use deform::distributed::{DistReport, all_ok, mpi};
-use mesh::io::Format;
-use mesh::msh::Encoding;
 use mpi::collective::SystemOperation;
 use mpi::traits::*;
 use serde::Serialize;
@@ -154,43 +152,13 @@ fn write(
 ) -> anyhow::Result<()> {
     let out = |name: &str| a.output.join(name);
     let rep = &r.report;
-    eprintln!(
-        "[run] writing {} (evaluation {:.2} s)",
-        a.output.display(),
-        rep.seconds
-    );
-    let mut written = Vec::new();
-    let mut put = |name: &str, f: &dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()>| {
-        let p = out(name);
-        write_atomic(&p, |w| f(w))?;
-        written.push(p.display().to_string());
-        anyhow::Ok(())
-    };
-    put("deformed.su2", &|w| {
-        mesh::io::write(&r.grid, Format::Su2, w)
-    })?;
-    put("deformed.msh", &|w| {
-        mesh::io::write(&r.grid, Format::Msh(Encoding::Ascii), w)
-    })?;
-    put("deformed.vtu", &|w| {
-        mesh::io::write(
-            &r.grid,
-            Format::from_path(Path::new("a.vtu")).expect("vtu"),
-            w,
-        )
-    })?;
-    put("baseline.su2", &|w| {
-        mesh::io::write(baseline, Format::Su2, w)
-    })?;
-    put("geometry.ron", &|w| ev.geometry.write_ron(w))?;
-    if !a.no_pictures {
-        super::run::pictures(
-            (study.geometry(), q0),
-            (&ev.geometry, &r.cell_quality),
-            &a.output,
-            &mut written,
-        )?;
-    }
+    let mut written = super::run::write_outputs(
+        &a.output,
+        rep.seconds,
+        (baseline, study.geometry(), q0),
+        (&r.grid, &ev.geometry, &r.cell_quality),
+        !a.no_pictures,
+    )?;
     let report_path = out("report.json");
     written.push(report_path.display().to_string());
     let rr = RunReport {

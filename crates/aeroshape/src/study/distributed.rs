@@ -199,34 +199,6 @@ fn decode_wall(ints: &[u64], floats: &[f64], wall: &[String]) -> (Mesh, Vec<u32>
     (m, nodes, counts)
 }
 
-/// Rank 0's reading of the grid: the serial study's checks (a grid, a wall, every marker
-/// the case names present) and the baseline quality.
-fn read_grid(case: &Case, case_path: &Path) -> Result<(Mesh, PathBuf, Vec<f64>)> {
-    let grid_path = case
-        .grid_path(case_path)
-        .ok_or_else(|| StudyError::NoGrid {
-            case: case_path.to_path_buf(),
-        })?;
-    let grid = mesh::io::read_path(&grid_path)?;
-    if case.wall.is_empty() {
-        return Err(StudyError::NoWall {
-            case: case_path.to_path_buf(),
-        });
-    }
-    for name in case.wall.iter().chain(&case.slide).chain(&case.fixed) {
-        if grid.marker(name).is_none() {
-            return Err(StudyError::MissingMarker {
-                case: case_path.to_path_buf(),
-                marker: name.clone(),
-                grid: grid_path.clone(),
-                available: grid.markers.iter().map(|m| m.name.clone()).collect(),
-            });
-        }
-    }
-    let quality = mesh::quality::cell_quality(&grid);
-    Ok((grid, grid_path, quality))
-}
-
 impl<'c> DistributedStudy<'c> {
     /// Reads the case file (on every rank) and builds the study (collective).
     pub fn load(comm: &'c Comm, case_path: &Path) -> Result<Self> {
@@ -254,7 +226,7 @@ impl<'c> DistributedStudy<'c> {
                 }),
         )?;
         let root = comm.rank() == 0;
-        let read = (root).then(|| read_grid(&case, case_path));
+        let read = (root).then(|| super::setup::read_grid(&case, case_path));
         let read = agree(comm, read.transpose())?;
         let (mut ints, mut floats) = match &read {
             Some((grid, ..)) => encode_wall(grid, &case.wall),

@@ -55,6 +55,19 @@ fn read_inputs(case: &Case, case_path: &Path) -> Result<Inputs> {
         source,
     })?;
     let db = GeomDb::from_ron_str(&text, &geometry_path.display().to_string())?;
+    let (grid, grid_path, quality) = read_grid(case, case_path)?;
+    Ok(Inputs {
+        db,
+        geometry_path,
+        grid,
+        grid_path,
+        quality,
+    })
+}
+
+/// The case's grid read, with the study's checks (a grid, a wall, every marker
+/// the case names present) and the baseline quality.
+pub(super) fn read_grid(case: &Case, case_path: &Path) -> Result<(Mesh, PathBuf, Vec<f64>)> {
     let grid_path = case
         .grid_path(case_path)
         .ok_or_else(|| StudyError::NoGrid {
@@ -77,13 +90,7 @@ fn read_inputs(case: &Case, case_path: &Path) -> Result<Inputs> {
         }
     }
     let quality = mesh::quality::cell_quality(&grid);
-    Ok(Inputs {
-        db,
-        geometry_path,
-        grid,
-        grid_path,
-        quality,
-    })
+    Ok((grid, grid_path, quality))
 }
 
 /// Stage 2: the parametrisation bound to the geometry, with the case's wing masters as the
