@@ -72,31 +72,10 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         return crate::run_mpi::run(a);
     }
     let t0 = Instant::now();
-    let mut case = Case::load(&a.case)?;
-    if let Some(l) = a.rotation_reach {
-        case.deform.rotation_reach = Some(l);
-    }
-    let mut inputs: Vec<PathBuf> = vec![a.case.clone(), case.geometry_path(&a.case)];
-    inputs.extend(case.grid_path(&a.case));
-    inputs.extend(a.dv.clone());
+    let case = load_case(&a)?;
     std::fs::create_dir_all(&a.output)
         .with_context(|| format!("{}: cannot create the output folder", a.output.display()))?;
     let out = |name: &str| a.output.join(name);
-    let names = [
-        "deformed.su2",
-        "deformed.msh",
-        "deformed.vtu",
-        "baseline.su2",
-        "geometry.ron",
-        "report.json",
-        "planform.png",
-        "sections.png",
-        "quality.png",
-    ];
-    let input_refs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
-    for n in names {
-        ensure_not_input(&out(n), &input_refs).map_err(anyhow::Error::msg)?;
-    }
     eprintln!("[run] building the study from {}", a.case.display());
     let study = Study::new(case, &a.case)?;
     let s = study.setup_report();
@@ -183,6 +162,34 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
 /// The PNG pictures: quality histogram before/after, wing planform and key sections
 /// before/after (the wing: components whose name starts with "wing"; sections at 20 %, 50 %
 /// and 98 % of its span).
+/// The case of `a` with the command line's overrides, once no file `run` writes into
+/// `a.output` would overwrite one of its inputs (the case, its geometry and grid, the design
+/// vector).
+pub(crate) fn load_case(a: &RunArgs) -> anyhow::Result<Case> {
+    let mut case = Case::load(&a.case)?;
+    if let Some(l) = a.rotation_reach {
+        case.deform.rotation_reach = Some(l);
+    }
+    let mut inputs: Vec<PathBuf> = vec![a.case.clone(), case.geometry_path(&a.case)];
+    inputs.extend(case.grid_path(&a.case));
+    inputs.extend(a.dv.clone());
+    let input_refs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    for n in [
+        "deformed.su2",
+        "deformed.msh",
+        "deformed.vtu",
+        "baseline.su2",
+        "geometry.ron",
+        "report.json",
+        "planform.png",
+        "sections.png",
+        "quality.png",
+    ] {
+        ensure_not_input(&a.output.join(n), &input_refs).map_err(anyhow::Error::msg)?;
+    }
+    Ok(case)
+}
+
 /// Writes a run's files into `dir`, each to a temporary name then renamed: the deformed grid
 /// (`.su2`, `.msh`, `.vtu`), the baseline grid, the updated geometry, and unless
 /// `pictures_too` is false the pictures. Returns the paths written, for `report.json`.

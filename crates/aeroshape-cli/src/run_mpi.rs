@@ -5,17 +5,16 @@
 //! the serial command's files (`report.json` with the distributed deformation's report under
 //! `distributed`). Every rank reports an error, and exits 1, alike.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use deform::distributed::{DistReport, all_ok, mpi};
-use mpi::collective::SystemOperation;
+use deform::distributed::{DistReport, first_failure, mpi};
 use mpi::traits::*;
 use serde::Serialize;
 
-use aeroshape::case::{Case, load_design_values};
-use aeroshape::fsio::{ensure_not_input, write_atomic};
+use aeroshape::case::load_design_values;
+use aeroshape::fsio::write_atomic;
 use aeroshape::study::distributed::DistributedStudy;
 use aeroshape::study::{Report, SetupReport};
 
@@ -41,28 +40,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     let universe = mpi::initialize().context("MPI could not be initialised")?;
     let world = universe.world();
     let root = world.rank() == 0;
-    let mut case = Case::load(&a.case)?;
-    if let Some(l) = a.rotation_reach {
-        case.deform.rotation_reach = Some(l);
-    }
-    let mut inputs: Vec<PathBuf> = vec![a.case.clone(), case.geometry_path(&a.case)];
-    inputs.extend(case.grid_path(&a.case));
-    inputs.extend(a.dv.clone());
-    let out = |name: &str| a.output.join(name);
-    let input_refs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
-    for n in [
-        "deformed.su2",
-        "deformed.msh",
-        "deformed.vtu",
-        "baseline.su2",
-        "geometry.ron",
-        "report.json",
-        "planform.png",
-        "sections.png",
-        "quality.png",
-    ] {
-        ensure_not_input(&out(n), &input_refs).map_err(anyhow::Error::msg)?;
-    }
+    let case = super::run::load_case(&a)?;
     let made = if root {
         std::fs::create_dir_all(&a.output)
             .with_context(|| format!("{}: cannot create the output folder", a.output.display()))
@@ -119,25 +97,13 @@ fn agree<T>(
     local: anyhow::Result<T>,
     subject: &Path,
 ) -> anyhow::Result<T> {
-    if all_ok(world, local.is_ok()) {
-        return local;
+    match first_failure(world, &local, |e| format!("{e:#}")) {
+        None => local,
+        Some((first, text)) => {
+            local?;
+            bail!("{text} (rank {first}; {})", subject.display())
+        }
     }
-    let me = world.rank();
-    let mine = if local.is_err() { me } else { i32::MAX };
-    let mut first = i32::MAX;
-    world.all_reduce_into(&mine, &mut first, SystemOperation::min());
-    let mut text = match &local {
-        Err(e) if me == first => format!("{e:#}").into_bytes(),
-        _ => Vec::new(),
-    };
-    let mut len = text.len() as u64;
-    let from = world.process_at_rank(first);
-    from.broadcast_into(&mut len);
-    text.resize(len as usize, 0);
-    from.broadcast_into(&mut text[..]);
-    local?;
-    let text = String::from_utf8_lossy(&text);
-    bail!("{text} (rank {first}; {})", subject.display())
 }
 
 /// Rank 0's files: the serial command's.

@@ -101,29 +101,12 @@ pub struct RootEvaluation {
 /// `local` on every rank when it is `Ok` on every rank; otherwise the lowest failing rank's
 /// error there and the same text as [`StudyError::Distributed`] elsewhere (collective).
 fn agree<T>(comm: &Comm, local: Result<T>) -> Result<T> {
-    let me = comm.rank();
-    let mine = if local.is_err() { me } else { i32::MAX };
-    let mut first = i32::MAX;
-    comm.all_reduce_into(&mine, &mut first, SystemOperation::min());
-    if first == i32::MAX {
-        return local;
+    match deform::distributed::first_failure(comm, &local, |e| e.to_string()) {
+        Some((rank, reason)) if rank != comm.rank() => {
+            Err(StudyError::Distributed { rank, reason })
+        }
+        _ => local,
     }
-    let mut text = match &local {
-        Err(e) if me == first => e.to_string().into_bytes(),
-        _ => Vec::new(),
-    };
-    let mut len = text.len() as u64;
-    let from = comm.process_at_rank(first);
-    from.broadcast_into(&mut len);
-    text.resize(len as usize, 0);
-    from.broadcast_into(&mut text[..]);
-    if me == first {
-        return local;
-    }
-    Err(StudyError::Distributed {
-        rank: first,
-        reason: String::from_utf8_lossy(&text).into_owned(),
-    })
 }
 
 /// Broadcasts rank 0's vector (its length first); collective.

@@ -48,20 +48,23 @@ pub(crate) fn min(comm: &Comm, x: f64) -> f64 {
     out
 }
 
-/// The ranks agree on `local`: when any rank failed, every rank returns the error of the
-/// lowest failing rank (its message broadcast from it), so that no rank goes on into an
-/// exchange that the others will not join.
-pub(crate) fn agree<T>(comm: &Comm, local: Result<T>) -> Result<T> {
+/// The lowest rank whose `local` failed and its message, broadcast from it to every rank, or
+/// `None` when every rank succeeded (collective: every rank calls it with its own outcome).
+/// `message` renders the failing rank's error.
+pub fn first_failure<T, E>(
+    comm: &Comm,
+    local: &std::result::Result<T, E>,
+    message: impl FnOnce(&E) -> String,
+) -> Option<(i32, String)> {
     let me = comm.rank();
     let mine = if local.is_err() { me } else { i32::MAX };
     let mut first = i32::MAX;
     comm.all_reduce_into(&mine, &mut first, SystemOperation::min());
     if first == i32::MAX {
-        return local;
+        return None;
     }
-    let mut text: Vec<u8> = match &local {
-        Err(Error::Distributed { reason, .. }) if me == first => reason.clone().into_bytes(),
-        Err(e) if me == first => e.to_string().into_bytes(),
+    let mut text: Vec<u8> = match local {
+        Err(e) if me == first => message(e).into_bytes(),
         _ => Vec::new(),
     };
     let mut len = text.len() as u64;
@@ -69,14 +72,22 @@ pub(crate) fn agree<T>(comm: &Comm, local: Result<T>) -> Result<T> {
     root.broadcast_into(&mut len);
     text.resize(len as usize, 0);
     root.broadcast_into(&mut text[..]);
-    if me == first {
+    Some((first, String::from_utf8_lossy(&text).into_owned()))
+}
+
+/// The ranks agree on `local`: when any rank failed, every rank returns the error of the
+/// lowest failing rank (its message broadcast from it), so that no rank goes on into an
+/// exchange that the others will not join.
+pub(crate) fn agree<T>(comm: &Comm, local: Result<T>) -> Result<T> {
+    let failure = first_failure(comm, &local, |e| match e {
+        Error::Distributed { reason, .. } => reason.clone(),
+        e => e.to_string(),
+    });
+    match failure {
         // The rank that failed keeps its own error (its type and fields).
-        return local;
+        Some((rank, reason)) if rank != comm.rank() => Err(Error::Distributed { rank, reason }),
+        _ => local,
     }
-    Err(Error::Distributed {
-        rank: first,
-        reason: String::from_utf8_lossy(&text).into_owned(),
-    })
 }
 
 /// Sends `out[r]` to rank r and returns what each rank sent here (`in[r]` from rank r).

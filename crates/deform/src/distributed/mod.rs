@@ -29,7 +29,7 @@ mod rfield;
 mod scatter;
 mod solve;
 
-pub use comm::Comm;
+pub use comm::{Comm, first_failure};
 pub use deformer::{COARSE_PARTS, Deformer, DistDeformed, DistReport, DistSeconds};
 pub use metis::{Cut, Partitioner};
 /// The MPI bindings (rsmpi) the distributed deformation is built on, for the caller's
