@@ -387,27 +387,9 @@ impl<'c> DistributedStudy<'c> {
         x: &[f64],
         progress: &mut dyn FnMut(&str),
     ) -> Result<(GeomDb, SurfaceGrid, ParamPhase, ModelPhase, SurfacePhase)> {
-        let reg = self.prepared.registry();
-        if x.len() != reg.len() {
-            return Err(param::Error::VectorLength {
-                expected: reg.len(),
-                found: x.len(),
-            }
-            .into());
-        }
+        super::evaluate::check_length(&self.prepared, x)?;
         progress("param");
-        let t = Instant::now();
-        let pts = self.prepared.apply(x)?;
-        let base = self.db.control_points();
-        let param = ParamPhase {
-            nodes_moved: pts.iter().zip(base).filter(|(p, q)| p != q).count(),
-            max_move: pts
-                .iter()
-                .zip(base)
-                .map(|(p, q)| (p - q).norm())
-                .fold(0.0, f64::max),
-            seconds: t.elapsed().as_secs_f64(),
-        };
+        let (pts, param) = super::evaluate::param_phase(&self.prepared, &self.db, x)?;
         progress("model update");
         let t = Instant::now();
         let (geometry, r) = self.model.update(&pts)?;

@@ -40,14 +40,7 @@ impl Study {
         progress: &mut dyn FnMut(&str),
     ) -> Result<Evaluation> {
         let t_all = Instant::now();
-        let reg = self.prepared.registry();
-        if x.len() != reg.len() {
-            return Err(param::Error::VectorLength {
-                expected: reg.len(),
-                found: x.len(),
-            }
-            .into());
-        }
+        check_length(&self.prepared, x)?;
         progress("param");
         let (points, param) = self.move_control_nodes(x)?;
         progress("model update");
@@ -73,7 +66,9 @@ impl Study {
             .map_or(0.0, |r| r.far_field.max_displacement);
         let report = Report {
             far_field_max_displacement,
-            design: reg
+            design: self
+                .prepared
+                .registry()
                 .names()
                 .iter()
                 .zip(x)
@@ -108,21 +103,7 @@ impl Study {
 
     /// Stage 1 (§5): the control nodes moved by the design vector.
     fn move_control_nodes(&self, x: &[f64]) -> Result<(Vec<Point3>, ParamPhase)> {
-        let t = Instant::now();
-        let pts = self.prepared.apply(x)?;
-        let base = self.db.control_points();
-        let nodes_moved = pts.iter().zip(base).filter(|(p, q)| p != q).count();
-        let max_move = pts
-            .iter()
-            .zip(base)
-            .map(|(p, q)| (p - q).norm())
-            .fold(0.0, f64::max);
-        let phase = ParamPhase {
-            seconds: t.elapsed().as_secs_f64(),
-            nodes_moved,
-            max_move,
-        };
-        Ok((pts, phase))
+        param_phase(&self.prepared, &self.db, x)
     }
 
     /// Stage 2 (§3.1–3.2): surfaces re-solved, curves and corners re-intersected.
@@ -248,4 +229,42 @@ impl Study {
             })
             .reduce(|| 0.0, f64::max)
     }
+}
+
+/// `Ok` when `x` holds one value per design variable of `prepared`, otherwise the error
+/// saying how many it needs.
+pub(super) fn check_length(prepared: &param::Prepared, x: &[f64]) -> Result<()> {
+    let n = prepared.registry().len();
+    if x.len() != n {
+        return Err(param::Error::VectorLength {
+            expected: n,
+            found: x.len(),
+        }
+        .into());
+    }
+    Ok(())
+}
+
+/// Stage 1 (§5): the control points of `db` moved by `prepared` at `x`, with the phase's
+/// figures (nodes moved, largest move, seconds).
+pub(super) fn param_phase(
+    prepared: &param::Prepared,
+    db: &GeomDb,
+    x: &[f64],
+) -> Result<(Vec<Point3>, ParamPhase)> {
+    let t = Instant::now();
+    let pts = prepared.apply(x)?;
+    let base = db.control_points();
+    let nodes_moved = pts.iter().zip(base).filter(|(p, q)| p != q).count();
+    let max_move = pts
+        .iter()
+        .zip(base)
+        .map(|(p, q)| (p - q).norm())
+        .fold(0.0, f64::max);
+    let phase = ParamPhase {
+        seconds: t.elapsed().as_secs_f64(),
+        nodes_moved,
+        max_move,
+    };
+    Ok((pts, phase))
 }

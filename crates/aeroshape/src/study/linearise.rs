@@ -112,14 +112,7 @@ impl Study {
     /// it was at `x` (reused, not run again), otherwise at a cold evaluation made here. The
     /// products of the result can be taken as many times as wanted.
     pub fn linearise(&self, x: &[f64]) -> Result<ChainLinearisation<'_>> {
-        let reg = self.prepared.registry();
-        if x.len() != reg.len() {
-            return Err(param::Error::VectorLength {
-                expected: reg.len(),
-                found: x.len(),
-            }
-            .into());
-        }
+        super::evaluate::check_length(&self.prepared, x)?;
         let (points, jac) = self.prepared.apply_with_jacobian(x)?;
         let recent = self
             .recent
