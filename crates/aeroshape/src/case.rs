@@ -153,8 +153,9 @@ pub struct DeformSettings {
     pub min_quality_ratio: f64,
     /// Largest number of increments.
     pub max_increments: usize,
-    /// Start each evaluation's solves from the previous evaluation's solution (see
-    /// `aeroshape::study`); `false`: from the baseline, bit for bit history independent.
+    /// Start each evaluation's solves from the previous evaluation's solution, and each
+    /// reverse product's adjoint solves from the previous one's (see `aeroshape::study`);
+    /// `false`: from the baseline and from zero, bit for bit history independent.
     pub warm_start: bool,
 }
 

@@ -277,4 +277,18 @@ fn linearise_after_evaluate_reuses_the_evaluation() {
         diff / scale
     );
     assert!(scale > 0.0 && diff < 1e-6 * scale, "{diff:e} of {scale:e}");
+    // The study warm-starts the adjoint solves from the last reverse product's (here: the
+    // cold linearisation's, at a nearby grid); forgetting the warm start starts them from
+    // zero. Both give the product to the solver tolerance.
+    let warm = reused.vjp(&w).unwrap();
+    s.forget_warm_start();
+    let zero = reused.vjp(&w).unwrap();
+    let d2 = warm
+        .iter()
+        .zip(&zero)
+        .map(|(p, q)| (p - q).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    eprintln!("warm-started adjoint against cold: {:.2e}", d2 / scale);
+    assert!(d2 < 1e-6 * scale, "{d2:e} of {scale:e}");
 }

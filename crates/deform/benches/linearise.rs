@@ -98,6 +98,7 @@ pub fn figures() {
         "vjp/eval",
         "iters e/v/j"
     );
+    let mut warm_rows = Vec::new();
     for n in sizes {
         let (m, bc, values) = case(n);
         let opts = DeformOptions::default();
@@ -109,6 +110,48 @@ pub fn figures() {
         let xbar = weights(&m);
         let (tv, v) = best(reps, || lin.vjp(&xbar).expect("vjp"));
         let (tj, j) = best(reps, || lin.jvp(&v.values).expect("jvp"));
+        // An optimiser's next step: the motion 1 % larger, the weights changed by 1 %; the
+        // evaluation warm-started from the last one, the reverse product from the last one's
+        // adjoint solutions (and cold, for comparison).
+        let values2: Vec<[f64; 3]> = values.iter().map(|v| v.map(|c| 1.01 * c)).collect();
+        let (tew, res2) = best(reps, || d.deform(&values2, Some(&res)).expect("deform"));
+        let lin2 = d.linearise(&res2).expect("linearise");
+        let xbar2: Vec<[f64; 3]> = xbar
+            .iter()
+            .zip(m.coords.iter())
+            .map(|(w, p)| std::array::from_fn(|c| w[c] * (1.0 + 0.01 * (p[c] + 0.3).sin())))
+            .collect();
+        let mut start = deform::AdjointStart::default();
+        lin.vjp_from(&xbar, &mut start).expect("vjp");
+        let (tvc, vc) = best(reps, || lin2.vjp(&xbar2).expect("vjp"));
+        let mut tvw = f64::INFINITY;
+        let mut vw = None;
+        for _ in 0..reps {
+            let mut st = start.clone();
+            let s = Instant::now();
+            let r = lin2.vjp_from(&xbar2, &mut st).expect("vjp");
+            tvw = tvw.min(s.elapsed().as_secs_f64());
+            vw = Some(r);
+        }
+        let vw = vw.expect("at least one run");
+        warm_rows.push(format!(
+            "{:>9} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.2} {:>9.2} {:>12} {:>10.1e}",
+            m.n_nodes(),
+            te,
+            tew,
+            tvc,
+            tvw,
+            tvc / te,
+            tvw / tew,
+            format!(
+                "{}+{}/{}/{}",
+                res2.report.iterations,
+                res2.report.rotation_iterations,
+                vc.iterations,
+                vw.iterations
+            ),
+            rel_diff(&vw.values, &vc.values),
+        ));
         println!(
             "{:>9} {:>7} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8.2} {:>14}",
             m.n_nodes(),
@@ -125,6 +168,34 @@ pub fn figures() {
             )
         );
     }
+    println!("next step (motion +1 %, weights ±1 %): evaluation and reverse product, cold / warm");
+    println!(
+        "{:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>12} {:>10}",
+        "nodes",
+        "eval s",
+        "eval w s",
+        "vjp s",
+        "vjp w s",
+        "cold",
+        "warm",
+        "iters e/v/w",
+        "w vs cold"
+    );
+    for r in warm_rows {
+        println!("{r}");
+    }
+}
+
+/// |a − b| / |b| over all components.
+fn rel_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let (mut d, mut n) = (0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        for c in 0..3 {
+            d += (x[c] - y[c]) * (x[c] - y[c]);
+            n += y[c] * y[c];
+        }
+    }
+    (d / n).sqrt()
 }
 
 /// The criterion group `linearise` at ~15k nodes.

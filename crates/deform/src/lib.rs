@@ -80,7 +80,7 @@ pub use deformer::{
 };
 pub use error::{Error, Result};
 pub use guard::cell_quality;
-pub use linearise::{Linearisation, Product};
+pub use linearise::{AdjointStart, Linearisation, Product};
 pub use options::{DeformOptions, SolverKind};
 pub use report::{DeformReport, FarField, PhaseTimes, StepTime};
 pub use request::Request;

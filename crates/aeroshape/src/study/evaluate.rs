@@ -164,7 +164,7 @@ impl Study {
         let (positions, any) = self.prescribed(surface);
         if !any {
             // The solution is Δx = 0: the next evaluation starts cold.
-            self.forget_warm_start();
+            *self.last.lock().unwrap_or_else(PoisonError::into_inner) = None;
             return Ok(Volume {
                 deformed: None,
                 phase: DeformPhase {

@@ -328,7 +328,20 @@ impl ChainLinearisation<'_> {
     pub fn vjp(&self, x_bar: &[[f64; 3]]) -> Result<Vec<f64>> {
         let s = &self.study;
         length("volume sensitivities", s.grid.n_nodes(), x_bar.len())?;
-        let wb = self.deform.vjp(x_bar)?.values;
+        let wb = if s.case.deform.warm_start {
+            // The adjoint solves start from the previous reverse product's solutions.
+            let mut start = s
+                .adjoint
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .take()
+                .unwrap_or_default();
+            let p = self.deform.vjp_from(x_bar, &mut start)?;
+            *s.adjoint.lock().unwrap_or_else(PoisonError::into_inner) = Some(start);
+            p.values
+        } else {
+            self.deform.vjp(x_bar)?.values
+        };
         let mut xs = vec![[0.0; 3]; s.grid.n_nodes()];
         let mut k = 0;
         for (i, w) in s.wall.iter().enumerate() {

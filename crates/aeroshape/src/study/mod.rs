@@ -124,6 +124,9 @@ pub struct Study {
     deformer: deform::Deformer<'static>,
     /// The last volume deformation, the warm start of the next one (None: start cold).
     last: Mutex<Option<Arc<deform::Deformed>>>,
+    /// The last reverse product's adjoint solutions, the start of the next one's (None:
+    /// start cold).
+    adjoint: Mutex<Option<deform::AdjointStart>>,
     /// The last evaluation's results, reused by [`Study::linearise`] at the same x.
     recent: Mutex<Option<Arc<EvaluatedAt>>>,
     quality: Vec<f64>,
@@ -203,9 +206,11 @@ impl Study {
         Ok(self.prepared.registry().vector_from_values(values)?)
     }
 
-    /// Makes the next evaluation start its solves from the baseline (see the module doc).
+    /// Makes the next evaluation start its solves from the baseline, and the next reverse
+    /// product its adjoint solves from zero (see the module doc).
     pub fn forget_warm_start(&self) {
         *self.last.lock().unwrap_or_else(PoisonError::into_inner) = None;
+        *self.adjoint.lock().unwrap_or_else(PoisonError::into_inner) = None;
     }
 
     /// Runs the chain for the design vector `x` (one value per design variable, in the

@@ -242,6 +242,7 @@ impl Study {
             fixed_nodes: wall.fixed_nodes,
             deformer,
             last: Mutex::new(None),
+            adjoint: Mutex::new(None),
             recent: Mutex::new(None),
             quality_before: Quality::of(&quality),
             quality,

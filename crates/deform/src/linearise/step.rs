@@ -476,13 +476,16 @@ impl Step {
 
     /// The reverse product: for the output weights `ybar`, adds to `wbar` (per input) and
     /// returns the weights of the start state c̄ (zero for the first increment) and the
-    /// solver iterations.
+    /// solver iterations. The adjoint solves start from `start` (an earlier reverse
+    /// product's solutions, where their lengths fit; zero otherwise) and leave their
+    /// solutions there.
     pub fn reverse(
         &self,
         d: &Deformer,
         ybar: &[V3],
         wbar: &mut [V3],
         rel_tol: f64,
+        start: &mut StepAdjoint,
     ) -> Result<(Vec<V3>, usize)> {
         let sys = &d.sys;
         let n = self.c.len();
@@ -498,7 +501,7 @@ impl Step {
             let nu = sys.node_of.len();
             let mut yu: Vec<V3> = sys.node_of.iter().map(|&i| ybar[i as usize]).collect();
             self.cons.project(&mut yu);
-            let mut bbar = vec![[0.0; 3]; nu];
+            let mut bbar = start_or_zero(std::mem::take(&mut start.eq21), nu);
             let rep = op.solve_linear(
                 &yu,
                 &mut bbar,
@@ -576,7 +579,7 @@ impl Step {
                         blend_d_t(self.q[i], qbar[i], weight_at(&d.reach, i))
                     })
                     .collect();
-                let mut z = vec![[0.0; 3]; nu];
+                let mut z = start_or_zero(std::mem::take(&mut start.eq26), nu);
                 let rep = op.solve_linear(
                     &ubar,
                     &mut z,
@@ -664,7 +667,9 @@ impl Step {
                         }
                     }
                 }
+                start.eq26 = z;
             }
+            start.eq21 = bbar;
         }
         // The targets.
         for (i, r) in d.cls.roles.iter().enumerate() {
@@ -676,6 +681,19 @@ impl Step {
         }
         Ok((cbar, iterations))
     }
+}
+
+/// The solutions of one increment's adjoint solves (Eq. 21, Eq. 26; empty when not
+/// solved), kept as the start of a later reverse product's solves.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct StepAdjoint {
+    pub eq21: Vec<V3>,
+    pub eq26: Vec<V3>,
+}
+
+/// `v` as the start of a solve of `n` unknowns: zero unless it has their length.
+fn start_or_zero(v: Vec<V3>, n: usize) -> Vec<V3> {
+    if v.len() == n { v } else { vec![[0.0; 3]; n] }
 }
 
 /// The derivative of a node's blended quaternion `q` = (φ u, w) (`crate::rfield::blend`,

@@ -412,3 +412,70 @@ fn step_size_study() {
         assert!(best < 1e-6, "{inc} increment(s): best {best:e}");
     }
 }
+
+/// A reverse product whose adjoint solves start from an earlier one's solutions (at a
+/// nearby motion and cotangent, two increments, R on) gives the cold product's answer to
+/// the solver tolerance in fewer iterations; a start that does not fit (another set-up's)
+/// is ignored.
+#[test]
+fn warm_started_reverse_product_agrees_with_the_cold_one() {
+    let m = box_grid();
+    let nodes = wing_nodes(&m);
+    let opts = DeformOptions {
+        min_quality_ratio: 1.0,
+        max_increments: 2,
+        rel_tol: 1e-10,
+        ..Default::default()
+    };
+    let bc = BoundaryConditions {
+        markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
+        displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
+    };
+    let d = Deformer::new(&m, &bc, &opts).unwrap();
+    let w = field(&m, &nodes, 2.0, BOX);
+    let w2: Vec<[f64; 3]> = w.iter().map(|v| v.map(|c| 1.01 * c)).collect();
+    let (a, b) = (d.deform(&w, None).unwrap(), d.deform(&w2, None).unwrap());
+    assert_eq!(a.report.increments, 2);
+    assert_eq!(b.report.increments, 2);
+    let (la, lb) = (d.linearise(&a).unwrap(), d.linearise(&b).unwrap());
+    let yb: Vec<[f64; 3]> = m
+        .coords
+        .iter()
+        .map(|p| [(p[0] + p[2]).sin(), (2.0 * p[1]).cos(), (p[0] * p[2]).sin()])
+        .collect();
+    let yb2: Vec<[f64; 3]> = yb
+        .iter()
+        .zip(&m.coords)
+        .map(|(y, p)| std::array::from_fn(|c| y[c] * (1.0 + 0.01 * (p[c] + 0.3).sin())))
+        .collect();
+    let mut start = deform::AdjointStart::default();
+    la.vjp_from(&yb, &mut start).unwrap();
+    let cold = lb.vjp(&yb2).unwrap();
+    let warm = lb.vjp_from(&yb2, &mut start).unwrap();
+    let diff: Vec<[f64; 3]> = add(&warm.values, -1.0, &cold.values);
+    let rel = norm(&diff) / norm(&cold.values);
+    assert!(rel < 1e-8, "warm against cold: {rel:e}");
+    assert!(
+        warm.iterations < cold.iterations,
+        "warm {} against cold {} iterations",
+        warm.iterations,
+        cold.iterations
+    );
+    // The same start again: already the solution of this product.
+    let again = lb.vjp_from(&yb2, &mut start).unwrap();
+    assert!(again.iterations < warm.iterations, "{}", again.iterations);
+    // Another set-up's start (other unknowns) is not used.
+    let small = deform::generate::box_with_block([7, 5, 6], [0.0; 3], BOX, [2, 0, 2], [5, 3, 4]);
+    let sn = wing_nodes(&small);
+    let sbc = BoundaryConditions {
+        markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
+        displacements: sn.iter().map(|&v| (v, [0.0; 3])).collect(),
+    };
+    let ds = Deformer::new(&small, &sbc, &opts).unwrap();
+    let rs = ds.deform(&field(&small, &sn, 2.0, BOX), None).unwrap();
+    let ls = ds.linearise(&rs).unwrap();
+    let ys: Vec<[f64; 3]> = (0..ls.n_nodes()).map(|_| [1.0, 0.5, -0.3]).collect();
+    let cold_s = ls.vjp(&ys).unwrap();
+    let other = ls.vjp_from(&ys, &mut start).unwrap();
+    assert_eq!(other, cold_s);
+}
