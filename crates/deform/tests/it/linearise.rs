@@ -55,6 +55,15 @@ fn direction(m: &Mesh, nodes: &[u32], size: [f64; 3]) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// The wing's nodes `nodes` prescribed (displacements given per call), the symmetry plane
+/// y = 0 sliding, the rest of the boundary fixed.
+fn sliding_wing(nodes: &[u32]) -> BoundaryConditions {
+    BoundaryConditions {
+        markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
+        displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
+    }
+}
+
 fn box_grid() -> Mesh {
     deform::generate::box_with_block([9, 6, 8], [0.0; 3], [2.0, 1.2, 1.6], [3, 0, 3], [6, 3, 5])
 }
@@ -150,10 +159,7 @@ fn forward_product_matches_central_differences_with_and_without_r() {
             rotation_reach: reach,
             ..Default::default()
         });
-        let bc = BoundaryConditions {
-            markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
-            displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
-        };
+        let bc = sliding_wing(&nodes);
         let d = Deformer::new(&m, &bc, &opts).unwrap();
         let w = field(&m, &nodes, 1.0, BOX);
         let dw = direction(&m, &nodes, BOX);
@@ -170,10 +176,7 @@ fn forward_product_matches_central_differences_at_zero_motion() {
     // The baseline itself (nothing is solved there): R's derivative is still there.
     let m = box_grid();
     let nodes = wing_nodes(&m);
-    let bc = BoundaryConditions {
-        markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
-        displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
-    };
+    let bc = sliding_wing(&nodes);
     let d = Deformer::new(&m, &bc, &tight(DeformOptions::default())).unwrap();
     let w = vec![[0.0; 3]; nodes.len()];
     let dw = direction(&m, &nodes, BOX);
@@ -196,10 +199,7 @@ fn forward_product_matches_central_differences_over_increments() {
             max_increments: 4,
             ..Default::default()
         });
-        let bc = BoundaryConditions {
-            markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
-            displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
-        };
+        let bc = sliding_wing(&nodes);
         let d = Deformer::new(&m, &bc, &opts).unwrap();
         let w = field(&m, &nodes, 2.0, BOX);
         let dw = direction(&m, &nodes, BOX);
@@ -324,10 +324,7 @@ fn reverse_product_is_the_transpose_of_the_forward_one_with_a_reach() {
         rotation_reach: Some(0.7),
         ..Default::default()
     };
-    let bc = BoundaryConditions {
-        markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
-        displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
-    };
+    let bc = sliding_wing(&nodes);
     let d = Deformer::new(&m, &bc, &opts).unwrap();
     let base = d.deform(&field(&m, &nodes, 2.0, BOX), None).unwrap();
     assert!(base.report.increments > 1, "{}", base.report.increments);
@@ -396,10 +393,7 @@ fn step_size_study() {
             max_increments: inc,
             ..Default::default()
         });
-        let bc = BoundaryConditions {
-            markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
-            displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
-        };
+        let bc = sliding_wing(&nodes);
         let d = Deformer::new(&m, &bc, &opts).unwrap();
         let w = field(&m, &nodes, 2.0, BOX);
         let dw = direction(&m, &nodes, BOX);
@@ -427,10 +421,7 @@ fn warm_started_reverse_product_agrees_with_the_cold_one() {
         rel_tol: 1e-10,
         ..Default::default()
     };
-    let bc = BoundaryConditions {
-        markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
-        displacements: nodes.iter().map(|&v| (v, [0.0; 3])).collect(),
-    };
+    let bc = sliding_wing(&nodes);
     let d = Deformer::new(&m, &bc, &opts).unwrap();
     let w = field(&m, &nodes, 2.0, BOX);
     let w2: Vec<[f64; 3]> = w.iter().map(|v| v.map(|c| 1.01 * c)).collect();
@@ -467,10 +458,7 @@ fn warm_started_reverse_product_agrees_with_the_cold_one() {
     // Another set-up's start (other unknowns) is not used.
     let small = deform::generate::box_with_block([7, 5, 6], [0.0; 3], BOX, [2, 0, 2], [5, 3, 4]);
     let sn = wing_nodes(&small);
-    let sbc = BoundaryConditions {
-        markers: vec![("y_m".into(), MarkerRole::SlidePlane)],
-        displacements: sn.iter().map(|&v| (v, [0.0; 3])).collect(),
-    };
+    let sbc = sliding_wing(&sn);
     let ds = Deformer::new(&small, &sbc, &opts).unwrap();
     let rs = ds.deform(&field(&small, &sn, 2.0, BOX), None).unwrap();
     let ls = ds.linearise(&rs).unwrap();
