@@ -10,6 +10,7 @@ mod chain;
 mod fixtures;
 mod regress;
 mod regress_mpi;
+mod regress_mpi_slide;
 mod regress_mpi_study;
 mod tidy;
 

@@ -10,7 +10,8 @@
 //!    within 1e-8 of the serial one, relative to the largest displacement, and no cell with
 //!    q ≤ 0. The `.pvtu` run (-n 3) cuts by coordinate bisection (`--partition rcb`).
 //! 3. `mpirun aeroshape run` on the default case against the serial run
-//!    (`regress_mpi_study`).
+//!    (`regress_mpi_study`); sliding on geometry supports and the volume and wall-distance
+//!    stiffnesses against the serial runs (`regress_mpi_slide`).
 //! 4. The partition given by the caller (`distributed` example, 3 ranks) against the serial
 //!    result, and two bad partitions (a missing ghost, a global id owned twice): exit status
 //!    1 with the error on every rank, within a time limit (a hang fails).
@@ -319,6 +320,7 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
     }
     pieces(&bin, &g, &grid, &serial, &out, drift)?;
     crate::regress_mpi_study::run(root, &bin, drift)?;
+    crate::regress_mpi_slide::run(root, &bin, drift)?;
     let ex = root.join("target/release/examples/distributed");
     let res = mpirun(3, &ex, &["24", "ok"])?;
     print!("{}", String::from_utf8_lossy(&res.stdout));

@@ -235,11 +235,6 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     let mut request = request(&args);
     #[cfg(feature = "mpi")]
     if crate::deform_mpi::launched() {
-        if args.rotation_reach.is_some() {
-            bail!(
-                "--rotation-reach is not available under mpirun (the distributed deformation carries the full R)"
-            );
-        }
         return crate::deform_mpi::run(&args, request);
     }
     let Some(format) = format else {

@@ -1,5 +1,6 @@
 //! `mpirun -n N aeroshape deform ...` (cargo feature `mpi`): the same flags as the serial
-//! command; rank 0 reads the grid, the deformation runs distributed
+//! command; rank 0 reads the grid, every rank the geometry of `--geometry` (the nodes
+//! sliding on its supports are iterated by their owners), the deformation runs distributed
 //! (`deform::distributed`, the partition made on rank 0), and rank 0 writes the gathered
 //! grid in one file (and the report), or, for an output `NAME.pvtu`, every rank writes its
 //! piece `NAME/NAME_<rank>.vtu` and rank 0 the index naming them. Every rank reports an
@@ -9,7 +10,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use deform::distributed::{self, Deformer, all_ok, mpi};
-use deform::{BoundaryConditions, Request};
+use deform::{BoundaryConditions, Request, Support, Supports};
 use mpi::traits::*;
 use serde::Serialize;
 
@@ -38,17 +39,34 @@ struct Report<'a> {
     distributed: &'a distributed::DistReport,
 }
 
-/// The grid and boundary conditions, read on rank 0: the request's, with the displacements
-/// of the flags on this grid (as the serial command makes them).
-fn read(args: &DeformArgs, request: &Request) -> anyhow::Result<(mesh::Mesh, BoundaryConditions)> {
-    if args.geometry.is_some() {
-        bail!("--geometry: sliding on geometry supports is not distributed yet (docs/mpi.md)");
-    }
+/// The grid, the boundary conditions and the supports of the grid's classified nodes on
+/// `geometry` (when given), read on rank 0: the request's, with the displacements of the
+/// flags on this grid (as the serial command makes them).
+type Input = (mesh::Mesh, BoundaryConditions, Vec<(u32, Support)>);
+
+/// Reads the grid and makes the boundary conditions on rank 0 (see [`Input`]).
+fn read(
+    args: &DeformArgs,
+    request: &Request,
+    geometry: Option<&geom_db::GeomDb>,
+) -> anyhow::Result<Input> {
     let m = mesh::io::read_path(&args.mesh)?;
+    let supports = geometry
+        .map(|db| Supports::from_classes(&m, db))
+        .transpose()?;
     let mut request = request.clone();
     add_displacements(args, &m, &mut request)?;
-    let bc = request.boundary_conditions(&m, None);
-    Ok((m, bc))
+    let bc = request.boundary_conditions(&m, supports.as_ref());
+    Ok((m, bc, supports.map_or_else(Vec::new, |s| s.nodes)))
+}
+
+/// The geometry of `--geometry`, read on every rank (it is small).
+fn read_geometry(path: &std::path::Path) -> anyhow::Result<geom_db::GeomDb> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    Ok(geom_db::GeomDb::from_ron_str(
+        &text,
+        &path.display().to_string(),
+    )?)
 }
 
 /// Runs the distributed deformation of `request` (its displacements made on rank 0 from the
@@ -68,36 +86,58 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
             })?)
         };
     let t = Instant::now();
+    let geometry = args.geometry.as_deref().map(read_geometry).transpose();
+    if !all_ok(&world, geometry.is_ok()) {
+        geometry?;
+        bail!(
+            "{}: another rank could not read the geometry",
+            args.geometry
+                .as_deref()
+                .unwrap_or(args.mesh.as_path())
+                .display()
+        );
+    }
+    let geometry = geometry?;
     let input = if root {
-        Some(read(args, &request))
+        Some(read(args, &request, geometry.as_ref()))
     } else {
         None
     };
-    let read_ok = !matches!(input, Some(Err(_)));
-    if !all_ok(&world, read_ok) {
-        return match input {
-            Some(Err(e)) => Err(e.context(format!("{}", args.mesh.display()))),
-            _ => bail!("{}: rank 0 could not read the input", args.mesh.display()),
-        };
+    // Every rank reports rank 0's error, so that all print the same line.
+    let input = input.transpose();
+    if let Some((_, e)) = distributed::first_failure(&world, &input, |e| {
+        format!("{}: {}", args.mesh.display(), crate::one_line(e))
+    }) {
+        bail!("{e}");
     }
-    let input = input.transpose()?;
+    let input = input?;
     let seconds_read = t.elapsed().as_secs_f64();
-    let whole = input.as_ref().map(|(m, bc)| (m, bc));
-    let d = Deformer::from_root_with(&world, whole, &opts, args.partition)
-        .with_context(|| format!("{}", args.mesh.display()))?
-        .coarse_parts(args.coarse_parts);
+    let d = match &geometry {
+        Some(db) => {
+            let whole = input.as_ref().map(|(m, bc, s)| (m, bc, &s[..]));
+            Deformer::from_root_on_supports(&world, db, whole, &opts, args.partition)
+        }
+        None => {
+            let whole = input.as_ref().map(|(m, bc, _)| (m, bc));
+            Deformer::from_root_with(&world, whole, &opts, args.partition)
+        }
+    }
+    .with_context(|| format!("{}", args.mesh.display()))?
+    .coarse_parts(args.coarse_parts);
     let out = d
         .deform()
         .with_context(|| format!("{}", args.mesh.display()))?;
     let written = match format {
         Some(format) => {
             let gathered = d.gather(&out.coords);
+            let supports = d.gather_supports(&out);
             match (input, gathered) {
-                (Some((m, _)), Some(coords)) => {
+                (Some((m, _, _)), Some(coords)) => {
                     let q = Some(quality(&m, &coords));
                     let t = Instant::now();
                     let mut m = m;
                     m.coords = coords;
+                    put_parameters(&mut m, supports.as_deref().unwrap_or_default());
                     aeroshape::fsio::write_atomic(&args.output, |w| mesh::io::write(&m, format, w))
                         .map_err(anyhow::Error::from)
                         .and_then(|()| {
@@ -116,7 +156,7 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
             }
         }
         None => write_pieces(&world, &d, &out.coords, args).and_then(|sources| match &input {
-            Some((m, _)) => {
+            Some((m, _, _)) => {
                 let t = Instant::now();
                 aeroshape::fsio::write_atomic(&args.output, |w| {
                     mesh::pvtu::write(&sources, true, w)
@@ -142,6 +182,23 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Puts the sliding nodes' new parameters into the grid's classification, as the serial
+/// command does (`deform::request::apply`).
+fn put_parameters(m: &mut mesh::Mesh, supports: &[(u64, Support)]) {
+    if let Some(classes) = m.classes.as_mut() {
+        for &(v, s) in supports {
+            let Some(c) = classes.get_mut(v as usize) else {
+                continue;
+            };
+            match s {
+                Support::Curve { t, .. } => c.param = [t, 0.0],
+                Support::Surface { uv, .. } => c.param = uv,
+                Support::Corner => {}
+            }
+        }
+    }
 }
 
 /// True when `path` names a grid in pieces (`.pvtu`).

@@ -161,7 +161,7 @@ pub struct StiffnessMatrix {
 /// that are on no fixed marker and belong to a skin element (a marker element whose nodes
 /// all have one) or to no marker. So a fixed marker held by zero displacements (the far
 /// field of a study, the seam of a fixed and a sliding marker) is not part of it.
-fn moving_boundary(mesh: &Mesh, bc: &BoundaryConditions, cls: &Classified) -> Vec<bool> {
+pub(crate) fn moving_boundary(mesh: &Mesh, bc: &BoundaryConditions, cls: &Classified) -> Vec<bool> {
     let n = mesh.n_nodes();
     let (mut on_fixed, mut on_marker, mut in_skin) =
         (vec![false; n], vec![false; n], vec![false; n]);

@@ -133,7 +133,30 @@ impl Springs<'_> {
 
 /// ℓ / (diagonal of the moving boundary's bounding box) of [`Stiffness::WallDistance`]
 /// (0.1–0.2 measured best: docs/crates/deform.md, "Wall-distance stiffness").
-const WALL_SCALE: f64 = 0.2;
+pub(crate) const WALL_SCALE: f64 = 0.2;
+
+impl<'a> Springs<'a> {
+    /// The evaluator at `x` from per-node factors computed elsewhere (the distributed
+    /// deformation's, over the ranks): `factor` is V̄ / V_node ([`Stiffness::Volume`]) or
+    /// the distance from the moving boundary ([`Stiffness::WallDistance`]) of every node of
+    /// `x`, `wall_len` the ℓ of the latter; `scale` as [`Springs::scale`].
+    #[cfg(feature = "mpi")]
+    pub(crate) fn with_factors(
+        x: &'a [[f64; 3]],
+        kind: Stiffness,
+        scale: f64,
+        factor: Vec<f64>,
+        wall_len: f64,
+    ) -> Self {
+        Springs {
+            x,
+            kind,
+            scale,
+            vol_factor: factor,
+            wall_len,
+        }
+    }
+}
 
 /// The springs' scale ([`Springs::scale`]) of a grid whose bounding box has the diagonal
 /// `diag`: a power of two near 1 / diag^p (exact scaling; K is ~1 / length^p).

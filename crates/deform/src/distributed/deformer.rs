@@ -20,6 +20,7 @@ use super::metis::Partitioner;
 use super::partition::{LocalGrid, Partition};
 use super::rfield::{Ctx, rotations};
 use super::scatter::Local;
+use super::slide::{self, Slide};
 use super::solve::{DistOperator, Overlap};
 use crate::assembly::{System, rhs};
 use crate::bc::{BoundaryConditions, NodeRole};
@@ -27,6 +28,7 @@ use crate::error::{Error, Result};
 use crate::operator::check_converged;
 use crate::options::{DeformOptions, SolverKind};
 use crate::stiffness::{Stiffness, length_scale, springs};
+use crate::support::{Support, Supports};
 
 /// What a distributed deformation did (the same figures on every rank).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -56,6 +58,15 @@ pub struct DistReport {
     pub bytes_per_iteration: u64,
     /// Aggregates of the coarse-grid correction over the ranks (0: none).
     pub coarse_aggregates: usize,
+    /// Nodes sliding on geometry supports over the ranks (Eqs. 27–33; 0 without).
+    pub sliding_on_supports: u64,
+    /// Outer iterations of the sliding on supports, summed over the increments.
+    pub slide_iterations: usize,
+    /// The largest last update of those outer iterations relative to the boundary
+    /// displacement.
+    pub slide_update: f64,
+    /// The largest distance a node sliding on a support moved.
+    pub slide_max_move: f64,
     /// Minimum cell quality before and after.
     pub min_quality: [f64; 2],
     /// Cells with q ≤ 0 before and after.
@@ -86,9 +97,16 @@ pub struct DistSeconds {
 pub struct DistDeformed {
     /// New coordinates of the local nodes.
     pub coords: Vec<[f64; 3]>,
+    /// Final supports and parameters of the owned nodes that slid on geometry supports
+    /// (global ids; empty without). [`Deformer::gather_supports`] brings them to rank 0.
+    pub supports: Vec<(u64, Support)>,
     /// What was done.
     pub report: DistReport,
 }
+
+/// What rank 0 gives [`Deformer::from_root_on_supports`]: the whole grid, its boundary
+/// conditions, and the supports of its classified nodes ([`Supports::nodes`]).
+pub type OnSupports<'a> = (&'a Mesh, &'a BoundaryConditions, &'a [(u32, Support)]);
 
 /// The least aggregates per rank of the coarse-grid correction by default
 /// ([`Deformer::coarse_parts`]): iterations at 1, 2 and 4 ranks in docs/mpi.md,
@@ -113,6 +131,10 @@ pub struct Deformer<'c> {
     coarse_parts: usize,
     /// One layer of overlap in the blocks of the preconditioner.
     overlap: bool,
+    /// The nodes sliding on geometry supports (None without).
+    slide: Option<Slide>,
+    /// The weight φ of R per local node (the reach of R; empty: 1 everywhere).
+    reach: Vec<f64>,
 }
 
 /// The owned unknowns' nodes `nodes` renumbered as the serial solver numbers the grid
@@ -184,6 +206,14 @@ impl<'c> Deformer<'c> {
         opts: &DeformOptions,
     ) -> Result<Self> {
         check_options(comm, opts)?;
+        if let Some(reach) = opts.rotation_reach.filter(|r| r.is_finite()) {
+            return Err(Error::Distributed {
+                rank: comm.rank(),
+                reason: format!(
+                    "rotation reach {reach} needs the partition made on rank 0 (the moving boundary is found on the whole grid); leave it unset (full R)"
+                ),
+            });
+        }
         let t = Instant::now();
         let local = Local::given(comm, grid, bc, opts)?;
         Self::set_up(comm, local, opts, t)
@@ -210,8 +240,45 @@ impl<'c> Deformer<'c> {
     ) -> Result<Self> {
         check_options(comm, opts)?;
         let t = Instant::now();
-        let local = Local::from_root(comm, whole, opts, by)?;
-        Self::set_up(comm, local, opts, t)
+        let local = Local::from_root(comm, whole, None, opts, by)?;
+        Self::set_up(comm, local, opts, t).map(Self::with_reach)
+    }
+
+    /// Sets the weights of the reach of R, when the options give a finite one (collective).
+    fn with_reach(mut self) -> Self {
+        if let Some(l) = self.opts.rotation_reach.filter(|l| l.is_finite()) {
+            let (comm, local) = (self.comm, &self.local);
+            self.reach = super::wall::reach_weights(comm, &local.part, &local.root_boundary, l);
+        }
+        self
+    }
+
+    /// [`Deformer::from_root_with`] with nodes sliding on the geometry's supports (as the
+    /// serial [`crate::deform_on_supports`]): `db` is the geometry on every rank; `whole`
+    /// holds, on rank 0, the grid, the boundary conditions (with
+    /// [`crate::MarkerRole::SlideOnSupport`] markers) and the supports of the grid's
+    /// classified nodes ([`Supports::nodes`], e.g. by [`Supports::from_classes`]). Rank 0
+    /// classifies the sliding nodes as serially; each owner then iterates its own.
+    /// Collective.
+    pub fn from_root_on_supports(
+        comm: &'c Comm,
+        db: &geom_db::GeomDb,
+        whole: Option<OnSupports<'_>>,
+        opts: &DeformOptions,
+        by: Partitioner,
+    ) -> Result<Self> {
+        check_options(comm, opts)?;
+        let t = Instant::now();
+        let sup = whole.map(|(_, _, nodes)| Supports {
+            db,
+            nodes: nodes.to_vec(),
+        });
+        let grid = whole.map(|(m, bc, _)| (m, bc));
+        let local = Local::from_root(comm, grid, sup.as_ref(), opts, by)?;
+        let mut d = Self::set_up(comm, local, opts, t).map(Self::with_reach)?;
+        let s = Slide::new(comm, db, &d.local.root_supports, &d.local.part, &d.sys)?;
+        d.slide = (s.total > 0).then_some(s);
+        Ok(d)
     }
 
     fn set_up(comm: &'c Comm, local: Local, opts: &DeformOptions, t: Instant) -> Result<Self> {
@@ -289,6 +356,8 @@ impl<'c> Deformer<'c> {
             scale: length_scale(diag, opts.stiffness),
             coarse_parts: COARSE_PARTS,
             overlap: true,
+            slide: None,
+            reach: Vec::new(),
         })
     }
 
@@ -318,6 +387,9 @@ impl<'c> Deformer<'c> {
         let coords: Vec<[f64; 3]> = self.sys.node_of.iter().map(|&i| x[i as usize]).collect();
         let mut constrained = vec![false; coords.len()];
         for &(k, _) in &self.sys.cons.items {
+            constrained[k as usize] = true;
+        }
+        for &k in self.slide.as_ref().map_or(&[][..], Slide::unknowns) {
             constrained[k as usize] = true;
         }
         Some(CoarseSpace::new(
@@ -368,16 +440,22 @@ impl<'c> Deformer<'c> {
         let (min0, bad0) = self.quality(&cells, x0);
         rep.seconds.quality += t.elapsed().as_secs_f64();
         let mut inc = 1usize;
+        let slide = self.slide.as_ref();
         loop {
             rep.attempts.push(inc);
             let mut cur = x0.clone();
+            let mut params = slide.map_or_else(Vec::new, Slide::initial_params);
             let (mut iterations, mut rot_iterations, mut residual) = (0, 0, 0.0f64);
+            let (mut slide_iterations, mut slide_update) = (0, 0.0f64);
             for m in 1..=inc {
                 let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
-                let o = self.increment(s, &mut cur, coarse.as_ref(), &mut rep.seconds)?;
+                let o =
+                    self.increment(s, &mut cur, &mut params, coarse.as_ref(), &mut rep.seconds)?;
                 iterations += o.0;
                 rot_iterations += o.1;
                 residual = residual.max(o.2);
+                slide_iterations += o.3.iterations;
+                slide_update = slide_update.max(o.3.update);
             }
             let t = Instant::now();
             let (min1, bad1) = self.quality(&cells, &cur);
@@ -400,25 +478,37 @@ impl<'c> Deformer<'c> {
             rep.residual = max(comm, residual);
             rep.min_quality = [min0, min1];
             rep.nonpositive = [bad0, bad1];
+            let mut supports = Vec::new();
+            if let Some(sl) = slide {
+                rep.sliding_on_supports = sl.total;
+                rep.slide_iterations = slide_iterations;
+                rep.slide_update = slide_update;
+                let mut moved = cur.clone();
+                rep.slide_max_move = max(comm, sl.place(&mut moved, &params, x0));
+                supports = sl.supports(&params);
+            }
             let s = &mut rep.seconds;
             [s.assemble, s.rotation, s.solve, s.quality] =
                 [s.assemble, s.rotation, s.solve, s.quality].map(|v| max(comm, v));
             return Ok(DistDeformed {
                 coords: cur,
+                supports,
                 report: rep,
             });
         }
     }
 
     /// One increment to the fraction `s` of the motion, from `cur` (local nodes, ghosts
-    /// up to date); returns the Eq. 21 and Eq. 26 iterations and the final residual.
+    /// up to date) and the sliding nodes' parameters `params`; returns the Eq. 21 and Eq. 26
+    /// iterations, the final residual and what the sliding on supports did.
     fn increment(
         &self,
         s: f64,
         cur: &mut [[f64; 3]],
+        params: &mut [[f64; 2]],
         coarse: Option<&CoarseSpace>,
         sec: &mut DistSeconds,
-    ) -> Result<(usize, usize, f64)> {
+    ) -> Result<(usize, usize, f64, slide::SlideOutcome)> {
         let (comm, opts, part, sys) = (self.comm, &self.opts, &self.local.part, &self.sys);
         let cls = &self.local.cls;
         let x0 = &part.grid.mesh.coords;
@@ -447,10 +537,15 @@ impl<'c> Deformer<'c> {
         }
         let max_disp = max(comm, max_disp);
         if max_disp == 0.0 {
-            return Ok((0, 0, 0.0));
+            return Ok((0, 0, 0.0, slide::SlideOutcome::default()));
         }
         let t = Instant::now();
-        let mut sp = springs(&part.grid.mesh, cur, opts.stiffness, &part.adj, &[], None);
+        let mut sp = match opts.stiffness {
+            Stiffness::Volume | Stiffness::WallDistance => {
+                super::wall::springs(comm, part, &cls.roles, cur, opts.stiffness, self.scale)
+            }
+            _ => springs(&part.grid.mesh, cur, opts.stiffness, &part.adj, &[], None),
+        };
         sp.scale = self.scale;
         let overlap = (self.overlap && comm.size() > 1).then_some(Overlap {
             comm,
@@ -475,6 +570,7 @@ impl<'c> Deformer<'c> {
             skin: &cls.skin,
             dim: part.grid.mesh.dim,
             opts,
+            reach: &self.reach,
         };
         let rf = rotations(&ctx, &op, cur, &target)?;
         sec.rotation += t.elapsed().as_secs_f64();
@@ -514,21 +610,45 @@ impl<'c> Deformer<'c> {
         sec.assemble += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let mut dx: Vec<V3> = vec![[0.0; 3]; sys.node_of.len()];
+        let cons = match &self.slide {
+            Some(sl) => sl.constraints(comm, &sys.cons, params)?,
+            None => sys.cons.clone(),
+        };
         let r = op.solve(
             comm,
             &self.unk_halo,
             self.unk_node.len(),
             &b,
             &mut dx,
-            &sys.cons,
+            &cons,
             opts,
             opts.rel_tol,
         );
         check_converged(&r, "spring system (Eq. 21)", opts)?;
+        let mut so = slide::SlideOutcome::default();
+        if let Some(sl) = &self.slide {
+            let n_all = self.unk_node.len();
+            so = sl.iterate(
+                comm,
+                &op,
+                &self.unk_halo,
+                n_all,
+                &sys.cons,
+                cur,
+                &b,
+                &mut dx,
+                params,
+                opts,
+                max_disp,
+            )?;
+        }
         for (k, &i) in sys.node_of.iter().enumerate() {
             for q in 0..3 {
                 cur[i as usize][q] += dx[k][q];
             }
+        }
+        if let Some(sl) = &self.slide {
+            sl.place(cur, params, x0);
         }
         for i in 0..cur.len() {
             if matches!(cls.roles[i], NodeRole::Rigid(_) | NodeRole::Displaced(_)) {
@@ -537,7 +657,8 @@ impl<'c> Deformer<'c> {
         }
         part.halo.exchange(comm, cur);
         sec.solve += t.elapsed().as_secs_f64();
-        Ok((r.iterations, rf.iterations, r.rel_residual))
+        let iterations = r.iterations + so.solver_iterations;
+        Ok((iterations, rf.iterations, r.rel_residual, so))
     }
 
     /// This rank's piece of the grid at its local coordinates `coords` (a result's
@@ -568,6 +689,13 @@ impl<'c> Deformer<'c> {
             .map(|(x, x0)| [x[0] - x0[0], x[1] - x0[1], x[2] - x0[2]])
             .collect();
         (m, d)
+    }
+
+    /// The final supports of every rank's sliding nodes (a result's
+    /// [`DistDeformed::supports`]), gathered on rank 0 by global id (`None` on the other
+    /// ranks). Collective.
+    pub fn gather_supports(&self, out: &DistDeformed) -> Option<Vec<(u64, Support)>> {
+        slide::gather(self.comm, &out.supports)
     }
 
     /// The owned nodes' coordinates of every rank, gathered on rank 0 in global-id order
@@ -624,23 +752,12 @@ impl<'c> Deformer<'c> {
 
 /// Refuses, on every rank alike, the options the distributed deformation does not have.
 fn check_options(comm: &Comm, opts: &DeformOptions) -> Result<()> {
-    let reason = if !matches!(
-        opts.stiffness,
-        Stiffness::InverseLength | Stiffness::InverseLengthSquared
-    ) {
-        Some(format!(
-            "stiffness {} needs grid-wide fields (mean volume, wall distance); use inverse-length or inverse-length2",
-            opts.stiffness
-        ))
-    } else if opts.solver == SolverKind::PointIteration {
+    let reason = if opts.solver == SolverKind::PointIteration {
         Some("the point iteration (jacobi) is not distributed; use pcg or pcg-jacobi".into())
     } else {
-        // The blend needs the grid-wide edge distance from the moving boundary.
-        opts.rotation_reach.filter(|r| r.is_finite()).map(|reach| {
-            format!(
-                "rotation reach {reach} needs the grid-wide distance from the moving boundary; leave it unset (full R) or use --no-rotation"
-            )
-        })
+        opts.rotation_reach
+            .filter(|l| l.is_nan() || *l < 0.0)
+            .map(|l| format!("the reach of R must be a length ≥ 0 (or infinite), not {l}"))
     };
     match reason {
         Some(reason) => Err(Error::Distributed {

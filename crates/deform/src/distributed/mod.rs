@@ -15,6 +15,9 @@
 //! - `solve`: Eq. 21's rows on each rank (deform's own assembly), the product overlapped
 //!   with the halo exchange, PCG with all-reduced dots and a block preconditioner of
 //!   per-rank multigrid; `rfield`: the R field (Eqs. 25–26) over the ranks.
+//! - `slide`: sliding on the geometry's supports (Eqs. 27–33), each owner its own sliding
+//!   nodes; `wall`: the grid-wide fields of the volume and wall-distance stiffnesses (the
+//!   mean cell volume, the distance from the moving boundary along grid edges).
 //! - [`deformer`]: [`Deformer`] (takes a communicator), the increments and the quality
 //!   guard with all-reduced counts, the gather on rank 0.
 
@@ -27,10 +30,12 @@ pub mod partition;
 pub mod rcb;
 mod rfield;
 mod scatter;
+mod slide;
 mod solve;
+mod wall;
 
 pub use comm::{Comm, first_failure};
-pub use deformer::{COARSE_PARTS, Deformer, DistDeformed, DistReport, DistSeconds};
+pub use deformer::{COARSE_PARTS, Deformer, DistDeformed, DistReport, DistSeconds, OnSupports};
 pub use metis::{Cut, Partitioner};
 /// The MPI bindings (rsmpi) the distributed deformation is built on, for the caller's
 /// `mpi::initialize()` and communicators.

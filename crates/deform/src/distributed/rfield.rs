@@ -1,7 +1,9 @@
 //! The R field (Eqs. 25–26) over the ranks: each rank averages the rotations of the skin
 //! elements around its owned nodes into unit quaternions (as the serial `rfield`), the ghosts
 //! get their owners' values, and Eq. 26 for the quaternions' vector part is one distributed
-//! solve with the increment's operator; then every local node has its R_i.
+//! solve with the increment's operator; then every local node has its R_i. With a reach of
+//! R, the quaternions are blended to the identity by each node's weight φ as serially: the
+//! skin's before Eq. 26, the unknowns' after.
 
 use nalgebra::{Matrix3, UnitQuaternion};
 use sparse::{Constraints, V3};
@@ -13,7 +15,8 @@ use crate::assembly::{System, rhs};
 use crate::error::Result;
 use crate::operator::check_converged;
 use crate::options::DeformOptions;
-use crate::rfield::{element_size, skin_points};
+use crate::options::weight_at;
+use crate::rfield::{blend, element_size, skin_points, unknown_quaternion};
 use crate::rotation::{frame, rotation_from_frame};
 
 /// Per local node, the unit quaternion (x, y, z, w) of R_i.
@@ -62,6 +65,8 @@ pub(crate) struct Ctx<'a> {
     pub skin: &'a [Vec<u32>],
     pub dim: u8,
     pub opts: &'a DeformOptions,
+    /// The weight φ of R per local node (the reach of R; empty: 1 everywhere).
+    pub reach: &'a [f64],
 }
 
 /// R for the motion of the skin from `cur` to `target` (local nodes).
@@ -124,6 +129,15 @@ pub(crate) fn rotations(
             }
         }
     }
+    if !c.reach.is_empty() {
+        // The skin's rotations blended first (they are the Eq. 26 boundary values).
+        any = false;
+        for (i, qi) in q.iter_mut().enumerate().take(c.n_owned_nodes) {
+            let (u, w) = blend([qi[0], qi[1], qi[2]], qi[3], c.reach[i]);
+            *qi = [u[0], u[1], u[2], w];
+            any |= u != [0.0; 3];
+        }
+    }
     out.any = max(c.comm, f64::from(u8::from(any))) > 0.0;
     if !out.any {
         out.q = q;
@@ -150,14 +164,9 @@ pub(crate) fn rotations(
     check_converged(&rep, "rotation field (Eq. 26)", c.opts)?;
     out.iterations = rep.iterations;
     for (k, &i) in c.sys.node_of.iter().enumerate() {
-        let v = xv[k];
-        let s2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-        q[i as usize] = if s2 <= 1.0 {
-            [v[0], v[1], v[2], (1.0 - s2).sqrt()]
-        } else {
-            let l = s2.sqrt();
-            [v[0] / l, v[1] / l, v[2] / l, 0.0]
-        };
+        let (u, w) = unknown_quaternion(xv[k]);
+        let (u, w) = blend(u, w, weight_at(c.reach, i as usize));
+        q[i as usize] = [u[0], u[1], u[2], w];
     }
     c.node_halo.exchange(c.comm, &mut q);
     out.q = q;

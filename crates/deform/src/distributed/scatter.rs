@@ -16,6 +16,7 @@ use crate::bc::{BoundaryConditions, Classified, MarkerRole, NodeRole, RigidMotio
 use crate::error::{Error, Result};
 use crate::options::DeformOptions;
 use crate::solve::Constraint;
+use crate::support::{SupNode, Supports};
 
 /// A rank's share of the problem.
 pub(crate) struct Local {
@@ -26,6 +27,13 @@ pub(crate) struct Local {
     pub disp: Vec<[f64; 3]>,
     /// How the parts were made: `given`, `metis`, `rcb`, or `rcb (METIS failed)`.
     pub made_by: &'static str,
+    /// On rank 0, the nodes sliding on geometry supports as the serial classification
+    /// finds them (whole-grid numbering); empty elsewhere. Their roles are sent as free:
+    /// `super::slide` hands each owner its own.
+    pub root_supports: Vec<SupNode>,
+    /// On rank 0 with a finite reach of R, the moving boundary of the serial deformation
+    /// (`crate::deformer::moving_boundary`, whole-grid numbering); empty otherwise.
+    pub root_boundary: Vec<bool>,
 }
 
 /// The ways rank 0 made the parts, as it broadcasts them (index + 1; 0: it failed).
@@ -67,28 +75,38 @@ impl Local {
             cls,
             disp,
             made_by: "given",
+            root_supports: Vec::new(),
+            root_boundary: Vec::new(),
         })
     }
 
     /// From the whole grid on rank 0 (`whole` is read on rank 0 only; the other ranks pass
-    /// None): classification as the serial deformation, cut into `comm.size()` parts by
+    /// None): classification as the serial deformation (with the supports `sup` of the
+    /// nodes sliding on the geometry, read on rank 0), cut into `comm.size()` parts by
     /// `by` (METIS falls back on coordinate bisection), each part sent to its rank.
     pub fn from_root(
         comm: &Comm,
         whole: Option<(&Mesh, &BoundaryConditions)>,
+        sup: Option<&Supports>,
         opts: &DeformOptions,
         by: Partitioner,
     ) -> Result<Self> {
         let root = comm.process_at_rank(0);
         let p = comm.size() as usize;
         type Piece = (Vec<u64>, Vec<f64>);
+        let mut root_supports = Vec::new();
+        let mut root_boundary = Vec::new();
         let mine: Result<Option<(Piece, u64)>> = if comm.rank() == 0 {
             let made = (|| {
                 let (m, bc) = whole.ok_or_else(|| Error::Distributed {
                     rank: 0,
                     reason: "rank 0 was given no grid".into(),
                 })?;
-                let cls = classify(m, bc, opts.plane_rel_tol, None)?;
+                let mut cls = classify(m, bc, opts.plane_rel_tol, sup)?;
+                root_supports = std::mem::take(&mut cls.supports);
+                if opts.rotation_reach.is_some_and(f64::is_finite) {
+                    root_boundary = crate::deformer::moving_boundary(m, bc, &cls);
+                }
                 let c = cut(m, p, by);
                 let grids = parts(m, &c.part, p);
                 let pieces: Vec<Piece> = grids.iter().map(|g| encode(g, &cls, bc)).collect();
@@ -137,6 +155,8 @@ impl Local {
             cls,
             disp,
             made_by: MADE_BY.get(how as usize - 1).copied().unwrap_or("?"),
+            root_supports,
+            root_boundary,
         })
     }
 }

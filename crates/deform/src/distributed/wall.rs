@@ -1,0 +1,220 @@
+//! The grid-wide fields of the volume and wall-distance stiffnesses over the ranks
+//! ([`springs`]), defined exactly as the serial `stiffness::springs`:
+//! - [`Stiffness::Volume`]: V̄ / V_i, V_i the mean volume of the cells around node i (its
+//!   owner has them all), V̄ the mean cell volume (one all-reduce of the sum and the count,
+//!   each cell counted by the owner of its lowest global node); the ghosts take their
+//!   owners' factors through the node halo.
+//! - [`Stiffness::WallDistance`]: the distance of every node from the moving nodes along
+//!   grid edges, by Dijkstra on each rank's part, seeded with the current distances, and
+//!   the ghosts' distances brought from their owners, repeated until no distance changes on
+//!   any rank. The fixed point is the serial one: each node's distance is the smallest
+//!   d_j + l_ij over its neighbours (its owner has every edge of it), the shortest path's
+//!   sums in the same order, whatever the order in which nodes are settled. ℓ is 0.2 × the
+//!   diagonal of the moving nodes' bounding box over the ranks.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use nalgebra::Vector3;
+
+use super::comm::{Comm, max, min, sum_n, sum_u64};
+use super::partition::Partition;
+use crate::bc::NodeRole;
+use crate::stiffness::{Springs, Stiffness, WALL_SCALE};
+
+/// True when this rank counts the cell `e`: it owns the cell's node of smallest global id.
+fn counted(part: &Partition, e: &[u32]) -> bool {
+    let g = &part.grid;
+    e.iter()
+        .min_by_key(|&&v| g.global_ids[v as usize])
+        .is_some_and(|&v| (v as usize) < g.n_owned)
+}
+
+/// The springs' evaluator of `kind` (volume or wall distance) at the local coordinates `x`
+/// (ghosts up to date), `roles` the local nodes' roles, `scale` the springs' scale of the
+/// whole grid. Collective.
+pub(crate) fn springs<'a>(
+    comm: &Comm,
+    part: &Partition,
+    roles: &[NodeRole],
+    x: &'a [[f64; 3]],
+    kind: Stiffness,
+    scale: f64,
+) -> Springs<'a> {
+    match kind {
+        Stiffness::Volume => {
+            Springs::with_factors(x, kind, scale, volume_factors(comm, part, x), 0.0)
+        }
+        _ => {
+            let moving: Vec<bool> = roles
+                .iter()
+                .map(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
+                .collect();
+            let n_owned = part.grid.n_owned;
+            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for (p, _) in x[..n_owned].iter().zip(&moving).filter(|e| *e.1) {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+            let (lo, hi) = (lo.map(|v| min(comm, v)), hi.map(|v| max(comm, v)));
+            let diag =
+                ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2))
+                    .sqrt();
+            let wall_len = if diag.is_finite() {
+                WALL_SCALE * diag
+            } else {
+                0.0
+            };
+            let d = edge_distance(comm, part, x, &moving);
+            Springs::with_factors(x, kind, scale, d, wall_len)
+        }
+    }
+}
+
+/// V̄ / V_i of every local node (1 where no cell or a zero volume is around it).
+fn volume_factors(comm: &Comm, part: &Partition, x: &[[f64; 3]]) -> Vec<f64> {
+    let mesh = &part.grid.mesh;
+    let n = x.len();
+    let mut sum = vec![0.0; n];
+    let mut cnt = vec![0u32; n];
+    let (mut total, mut ncell) = (0.0, 0.0);
+    for t in mesh.tets() {
+        let v = mesh::quality::tet_volume([
+            x[t[0] as usize],
+            x[t[1] as usize],
+            x[t[2] as usize],
+            x[t[3] as usize],
+        ])
+        .abs();
+        if counted(part, t) {
+            total += v;
+            ncell += 1.0;
+        }
+        for &i in t {
+            sum[i as usize] += v;
+            cnt[i as usize] += 1;
+        }
+    }
+    for t in mesh.triangles() {
+        let p = |i: u32| Vector3::from(x[i as usize]);
+        let v = 0.5 * (p(t[1]) - p(t[0])).cross(&(p(t[2]) - p(t[0]))).norm();
+        if counted(part, t) {
+            total += v;
+            ncell += 1.0;
+        }
+        for &i in t {
+            sum[i as usize] += v;
+            cnt[i as usize] += 1;
+        }
+    }
+    let [total, ncell] = sum_n(comm, [total, ncell]);
+    let mean = if ncell > 0.0 { total / ncell } else { 1.0 };
+    let mut f: Vec<[f64; 1]> = (0..n)
+        .map(|i| {
+            [if cnt[i] > 0 && sum[i] > 0.0 {
+                mean / (sum[i] / f64::from(cnt[i]))
+            } else {
+                1.0
+            }]
+        })
+        .collect();
+    // A ghost's cells are not all on this rank: its owner's factor.
+    part.halo.exchange(comm, &mut f);
+    f.into_iter().map(|v| v[0]).collect()
+}
+
+/// The distance of every local node from the nodes flagged `source` (local flags, ghosts
+/// included) along the whole grid's edges (∞ where no source is reached). Collective.
+pub(crate) fn edge_distance(
+    comm: &Comm,
+    part: &Partition,
+    x: &[[f64; 3]],
+    source: &[bool],
+) -> Vec<f64> {
+    let mut d: Vec<[f64; 1]> = source
+        .iter()
+        .map(|&s| [if s { 0.0 } else { f64::INFINITY }])
+        .collect();
+    loop {
+        let before: Vec<u64> = d.iter().map(|v| v[0].to_bits()).collect();
+        relax(&part.adj, x, &mut d);
+        part.halo.exchange(comm, &mut d);
+        let changed = d.iter().zip(&before).any(|(v, &b)| v[0].to_bits() != b);
+        if sum_u64(comm, u64::from(changed)) == 0 {
+            break;
+        }
+    }
+    d.into_iter().map(|v| v[0]).collect()
+}
+
+/// Dijkstra on the local graph from every node of finite distance in `d` (lowered in
+/// place).
+fn relax(adj: &mesh::Adjacency, x: &[[f64; 3]], d: &mut [[f64; 1]]) {
+    // Non-negative f64 bit patterns order like the values.
+    let mut heap: BinaryHeap<Reverse<(u64, u32)>> = d
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v[0].is_finite())
+        .map(|(i, v)| Reverse((v[0].to_bits(), i as u32)))
+        .collect();
+    while let Some(Reverse((key, i))) = heap.pop() {
+        let i = i as usize;
+        let di = f64::from_bits(key);
+        if di > d[i][0] {
+            continue;
+        }
+        let a = x[i];
+        for &j in adj.neighbours(i) {
+            let j = j as usize;
+            let b = x[j];
+            let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt();
+            let dj = di + l;
+            if dj < d[j][0] {
+                d[j][0] = dj;
+                heap.push(Reverse((dj.to_bits(), j as u32)));
+            }
+        }
+    }
+}
+
+/// The weight φ of R per local node for the reach `reach` ([`crate::options::reach_weight`]
+/// of the distance from the moving boundary along grid edges, on the baseline grid, as the
+/// serial set-up): rank 0's moving boundary `root` (whole-grid numbering, read on rank 0
+/// only) is broadcast as global ids, each rank flags its local nodes and the distance is
+/// [`edge_distance`] over the ranks. Collective.
+pub(crate) fn reach_weights(comm: &Comm, part: &Partition, root: &[bool], reach: f64) -> Vec<f64> {
+    use mpi::traits::*;
+    let rank0 = comm.process_at_rank(0);
+    let mut ids: Vec<u64> = if comm.rank() == 0 {
+        (0..root.len() as u64)
+            .filter(|&g| root[g as usize])
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut len = ids.len() as u64;
+    rank0.broadcast_into(&mut len);
+    ids.resize(len as usize, 0);
+    if len > 0 {
+        rank0.broadcast_into(&mut ids[..]);
+    }
+    let g = &part.grid;
+    let local: std::collections::HashMap<u64, usize> = g
+        .global_ids
+        .iter()
+        .enumerate()
+        .map(|(i, &gid)| (gid, i))
+        .collect();
+    let mut source = vec![false; g.mesh.n_nodes()];
+    for gid in ids {
+        if let Some(&i) = local.get(&gid) {
+            source[i] = true;
+        }
+    }
+    edge_distance(comm, part, &g.mesh.coords, &source)
+        .into_iter()
+        .map(|d| crate::options::reach_weight(d, reach))
+        .collect()
+}
