@@ -9,7 +9,9 @@
 //!    serially and not none, and must move (a check that passes when nothing slides would
 //!    be no check).
 //! 2. `--stiffness volume`, `--stiffness wall-distance` and `--rotation-reach 3` with the
-//!    wing pitched.
+//!    wing pitched, solved to 1e-13: the stiffer springs make the solution's error larger
+//!    for a residual (the serial grid solved to 1e-11 is 1.1e-8 from the one solved to
+//!    1e-13 with the wall-distance springs, docs/perf-log/2026-12-03-mpi-sliding.md).
 //!
 //! Every node of the gathered grid within 1e-8 of the serial one, relative to the largest
 //! displacement, and no inverted cell. Then a geometry the grid's classification does not
@@ -40,7 +42,7 @@ fn cases(geometry: &str) -> Vec<Case> {
         "--slide",
         "symmetry",
         "--tolerance",
-        "1e-11",
+        "1e-13",
     ]);
     let mut slide = s(&[
         "--rigid",
@@ -229,18 +231,18 @@ pub fn run(root: &Path, bin: &Path, drift: &mut Vec<String>) -> Result<(), Strin
     ];
     let res = mpirun(3, bin, &a)?;
     let err = String::from_utf8_lossy(&res.stderr);
-    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
-    let same = lines.windows(2).all(|w| w[0] == w[1]);
+    // The cylinder's curve 0 is far from the grid's nodes classified on the case's curve 0:
+    // rank 0's classification refuses them, and every rank names the node.
+    let text = "away from its support";
+    let lines = err
+        .lines()
+        .filter(|l| l.starts_with("error:") && l.contains(text))
+        .count();
     let code = res.status.code();
-    println!(
-        "regress: mpi supports, wrong geometry: exit {code:?}, {} rank(s) reported {:?}",
-        lines.len(),
-        lines.first().copied().unwrap_or("")
-    );
-    if code != Some(1) || lines.len() != 3 || !same {
+    println!("regress: mpi supports, wrong geometry: exit {code:?}, {lines} rank(s) reported it");
+    if code != Some(1) || lines != 3 {
         drift.push(format!(
-            "mpi supports: wrong geometry: exit {code:?}, {} of 3 ranks printed an error, alike: {same}",
-            lines.len()
+            "mpi supports: wrong geometry: exit {code:?}, {lines} of 3 ranks printed \"{text}\""
         ));
     }
     Ok(())
