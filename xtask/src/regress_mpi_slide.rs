@@ -15,7 +15,7 @@
 //!
 //! Every node of the gathered grid within 1e-8 of the serial one, relative to the largest
 //! displacement, and no inverted cell. Then a geometry the grid's classification does not
-//! refer to: every rank must print the same error and exit 1 (no hang).
+//! refer to: all three ranks of `-n 3` must print the error and exit 1 (no hang).
 
 use std::path::Path;
 use std::process::Command;

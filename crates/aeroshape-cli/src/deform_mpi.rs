@@ -71,11 +71,45 @@ fn read_geometry(path: &std::path::Path) -> anyhow::Result<geom_db::GeomDb> {
 
 /// Runs the distributed deformation of `request` (its displacements made on rank 0 from the
 /// flags) on the world communicator.
+///
+/// A failure is printed here by every rank, in one write, and the ranks then wait for each
+/// other before MPI is finalised and they exit (once one rank exits 1, mpirun kills the
+/// others); the error returned is then [`Reported`].
 pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
-    let opts = request.options();
     let t_all = Instant::now();
     let universe = mpi::initialize().context("MPI could not be initialised")?;
     let world = universe.world();
+    if let Err(e) = deform_on(&world, args, request, t_all) {
+        // One write of the whole line: the ranks' lines share mpirun's stderr, and
+        // `eprintln!` writes the pieces of its format separately (they interleaved).
+        let line = format!("error: {}\n", crate::one_line(&e));
+        let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
+        world.barrier();
+        return Err(Reported.into());
+    }
+    Ok(())
+}
+
+/// An error every rank has already printed: the program exits 1 without printing it again.
+#[derive(Debug)]
+pub struct Reported;
+
+impl std::fmt::Display for Reported {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("the error was printed by every rank")
+    }
+}
+
+impl std::error::Error for Reported {}
+
+/// [`run`] on the world communicator `world`.
+fn deform_on(
+    world: &distributed::Comm,
+    args: &DeformArgs,
+    request: Request,
+    t_all: Instant,
+) -> anyhow::Result<()> {
+    let opts = request.options();
     let root = world.rank() == 0;
     let format =
         if pieces(&args.output) {
@@ -87,7 +121,7 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
         };
     let t = Instant::now();
     let geometry = args.geometry.as_deref().map(read_geometry).transpose();
-    if !all_ok(&world, geometry.is_ok()) {
+    if !all_ok(world, geometry.is_ok()) {
         geometry?;
         bail!(
             "{}: another rank could not read the geometry",
@@ -105,7 +139,7 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
     };
     // Every rank reports rank 0's error, so that all print the same line.
     let input = input.transpose();
-    if let Some((_, e)) = distributed::first_failure(&world, &input, |e| {
+    if let Some((_, e)) = distributed::first_failure(world, &input, |e| {
         format!("{}: {}", args.mesh.display(), crate::one_line(e))
     }) {
         bail!("{e}");
@@ -115,11 +149,11 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
     let d = match &geometry {
         Some(db) => {
             let whole = input.as_ref().map(|(m, bc, s)| (m, bc, &s[..]));
-            Deformer::from_root_on_supports(&world, db, whole, &opts, args.partition)
+            Deformer::from_root_on_supports(world, db, whole, &opts, args.partition)
         }
         None => {
             let whole = input.as_ref().map(|(m, bc, _)| (m, bc));
-            Deformer::from_root_with(&world, whole, &opts, args.partition)
+            Deformer::from_root_with(world, whole, &opts, args.partition)
         }
     }
     .with_context(|| format!("{}", args.mesh.display()))?
@@ -155,7 +189,7 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
                 _ => Ok(()),
             }
         }
-        None => write_pieces(&world, &d, &out.coords, args).and_then(|sources| match &input {
+        None => write_pieces(world, &d, &out.coords, args).and_then(|sources| match &input {
             Some((m, _, _)) => {
                 let t = Instant::now();
                 aeroshape::fsio::write_atomic(&args.output, |w| {
@@ -174,7 +208,7 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
             None => Ok(()),
         }),
     };
-    if !all_ok(&world, written.is_ok()) {
+    if !all_ok(world, written.is_ok()) {
         written?;
         bail!(
             "{}: rank 0 could not write the output",

@@ -92,6 +92,9 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // The reader of stdout went away (`| head`): nothing more to say to anyone.
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        // Under mpirun: every rank has printed it already.
+        #[cfg(feature = "mpi")]
+        Err(e) if e.is::<deform_mpi::Reported>() => ExitCode::from(1),
         Err(e) => {
             eprintln!("error: {}", one_line(&e));
             ExitCode::from(1)
