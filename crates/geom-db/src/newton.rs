@@ -17,8 +17,13 @@
 //! When no descent is possible any more (round-off, or bounds that clamp the step to nothing)
 //! or the iterations are spent, a residual within 16× the tolerance is accepted as converged
 //! and reported as it is ([`NewtonReport`]).
+//!
+//! [`pair`] holds the one problem that two crates solve with it: the intersection point of
+//! two surfaces with one parameter frozen (Eq. 12).
 
 use nalgebra::{SMatrix, SVector};
+
+pub mod pair;
 
 /// Objective value, gradient and (approximate) Hessian at a point.
 #[derive(Debug, Clone, Copy)]

@@ -26,7 +26,9 @@
 //!    complementary direction has the larger sine |n₁ · r₂,w| / |r₂,w| (v₂ on ties, as in the
 //!    paper). Only when both sines of surface 2 are below 0.1 (the curve runs almost along both
 //!    of its iso-lines, a degenerate parametrisation) are the parameters of surface 1 considered
-//!    too, with the roles of the surfaces exchanged.
+//!    too, with the roles of the surfaces exchanged. The frozen problem (½|r₁ − r₂|² in the
+//!    three free parameters, Gauss–Newton) and the sines are geom-db's
+//!    ([`geom_db::newton::pair`]), shared with the import's junction rebuild.
 //! 3. **Fallback.** If the frozen parameter gives no solution (the Jacobian is singular at the
 //!    start — sine below 1e-6 — or Newton does not reach |r₁ − r₂| ≤ tol, e.g. because the
 //!    iso-line no longer meets the other surface inside its domain), the point is re-solved as
@@ -47,6 +49,7 @@
 use crate::error::{Error, Result};
 use crate::project::{ProjectOptions, SurfaceProjector};
 use geom_db::eval::ParamSurface;
+use geom_db::newton::pair::{Frozen, free_sines};
 use geom_db::newton::{self, Eval, Problem, Settings};
 use geom_db::prelude::{Point3, Vector3};
 use nalgebra::{SMatrix, SVector};
@@ -378,99 +381,6 @@ impl CurveUpdate {
     }
 }
 
-/// F(y) = r₁(u₁, v₁) − r₂(u₂, v₂) in the full parameters y = [u₁, v₁, u₂, v₂], with the
-/// Jacobian columns [r₁,u, r₁,v, −r₂,u, −r₂,v].
-fn residual_and_jacobian<S1, S2>(s1: &S1, s2: &S2, y: &[f64; 4]) -> (Vector3, [Vector3; 4], f64)
-where
-    S1: ParamSurface + ?Sized,
-    S2: ParamSurface + ?Sized,
-{
-    let d1 = s1.derivs(y[0], y[1]);
-    let d2 = s2.derivs(y[2], y[3]);
-    (
-        d1.point - d2.point,
-        [d1.du, d1.dv, -d2.du, -d2.dv],
-        d1.point.coords.norm() + d2.point.coords.norm(),
-    )
-}
-
-/// Eq. (12) with parameter `frozen` (index into y) held at its value in `y0`.
-struct FrozenProblem<'s, S1: ?Sized, S2: ?Sized> {
-    s1: &'s S1,
-    s2: &'s S2,
-    y0: [f64; 4],
-    frozen: usize,
-}
-
-impl<S1, S2> FrozenProblem<'_, S1, S2>
-where
-    S1: ParamSurface + ?Sized,
-    S2: ParamSurface + ?Sized,
-{
-    fn full(&self, x: &[f64; 3]) -> [f64; 4] {
-        let mut y = [0.0; 4];
-        let mut k = 0;
-        for (i, yi) in y.iter_mut().enumerate() {
-            if i == self.frozen {
-                *yi = self.y0[i];
-            } else {
-                *yi = x[k];
-                k += 1;
-            }
-        }
-        y
-    }
-    fn reduce(&self, y: &[f64; 4]) -> [f64; 3] {
-        let mut x = [0.0; 3];
-        let mut k = 0;
-        for (i, yi) in y.iter().enumerate() {
-            if i != self.frozen {
-                x[k] = *yi;
-                k += 1;
-            }
-        }
-        x
-    }
-}
-
-impl<S1, S2> Problem<3> for FrozenProblem<'_, S1, S2>
-where
-    S1: ParamSurface + ?Sized,
-    S2: ParamSurface + ?Sized,
-{
-    fn eval(&self, x: &[f64; 3], _active: &[bool; 3]) -> Eval<3> {
-        let y = self.full(x);
-        let (f, cols, mag) = residual_and_jacobian(self.s1, self.s2, &y);
-        let mut j = SMatrix::<f64, 3, 3>::zeros();
-        let mut k = 0;
-        for (i, c) in cols.iter().enumerate() {
-            if i != self.frozen {
-                j.set_column(k, c);
-                k += 1;
-            }
-        }
-        let g = j.transpose() * f;
-        let h = j.transpose() * j;
-        let r = f.norm();
-        if !r.is_finite() {
-            return Eval {
-                f: f64::INFINITY,
-                g,
-                h,
-                res: f64::INFINITY,
-                fnoise: 0.0,
-            };
-        }
-        Eval {
-            f: 0.5 * r * r,
-            g,
-            h,
-            res: r,
-            fnoise: 16.0 * f64::EPSILON * r * mag,
-        }
-    }
-}
-
 /// The fallback: r₁ − r₂ = 0 and (r₁ − p_old)·t = 0 in the four parameters.
 struct NormalPlaneProblem<'s, S1: ?Sized, S2: ?Sized> {
     s1: &'s S1,
@@ -517,31 +427,6 @@ where
                 * (d1.point.coords.norm() + d2.point.coords.norm() + self.p_old.coords.norm()),
         }
     }
-}
-
-/// For each candidate frozen parameter k of y = [u₁, v₁, u₂, v₂], the sine that measures the
-/// conditioning of Eq. (12) with k frozen: |n_other · r̂_free| where `free` is the other
-/// parameter of the same surface and `n_other` the other surface's unit normal.
-fn free_sines<S1, S2>(s1: &S1, s2: &S2, y: &[f64; 4]) -> [f64; 4]
-where
-    S1: ParamSurface + ?Sized,
-    S2: ParamSurface + ?Sized,
-{
-    let d1 = s1.derivs(y[0], y[1]);
-    let d2 = s2.derivs(y[2], y[3]);
-    let unit = |v: Vector3| {
-        let n = v.norm();
-        if n > 0.0 { v / n } else { Vector3::zeros() }
-    };
-    let n1 = unit(d1.du.cross(&d1.dv));
-    let n2 = unit(d2.du.cross(&d2.dv));
-    let sine = |n: &Vector3, r: &Vector3| n.dot(&unit(*r)).abs();
-    [
-        sine(&n2, &d1.dv),
-        sine(&n2, &d1.du),
-        sine(&n1, &d2.dv),
-        sine(&n1, &d2.du),
-    ]
 }
 
 /// Candidates in order of preference: v₂, u₂ (the paper freezes a parameter of surface 2),
@@ -669,14 +554,11 @@ where
             let mut frozen_iters = 0;
             let mut frozen_res = f64::INFINITY;
             if sine > 1e-6 {
-                let prob = FrozenProblem { s1, s2, y0, frozen };
-                let lo3 = prob.reduce(&lo);
-                let hi3 = prob.reduce(&hi);
-                let o = newton::minimise(&prob, prob.reduce(&y0), &lo3, &hi3, settings);
+                let prob = Frozen::new(s1, s2, frozen, y0[frozen]);
+                let (y, o) = prob.solve(&y0, &lo, &hi, settings);
                 frozen_iters = o.report.iterations;
                 frozen_res = o.eval.res;
                 if o.report.converged {
-                    let y = prob.full(&o.x);
                     return Ok(finish(
                         s1,
                         s2,

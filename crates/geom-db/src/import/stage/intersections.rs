@@ -26,9 +26,10 @@
 //!    1e-5 of the model size are merged.
 //! 4. Each arc interpolates the intersection at the Chebyshev–Lobatto nodes of the driving
 //!    parameter (Eq. 12 with that parameter frozen: ½|r₁ − r₂|² in the other three by the
-//!    safeguarded Newton), at degree 4, 6, 8 or 10, the first whose distance to both supports
-//!    at 2n + 2 points between the nodes is within the target (1e-10 of the model size);
-//!    an arc still above it at degree 10 is halved (at most 4 times).
+//!    safeguarded Newton, [`crate::newton::pair::Frozen`]), at degree 4, 6, 8 or 10, the
+//!    first whose distance to both supports at 2n + 2 points between the nodes is within the
+//!    target (1e-10 of the model size); an arc still above it at degree 10 is halved (at
+//!    most 4 times).
 //!
 //! The ends of the curve are solved the same way, so a junction that ends on a support's
 //! border (the trailing edge of a closed wing) ends exactly on it; the caller moves the
@@ -38,10 +39,10 @@
 use crate::curve::Arc;
 use crate::eval::ParamSurface;
 use crate::invert::{InvertOptions, SurfaceInverter};
-use crate::newton::{Eval, Problem, Settings, minimise};
-use crate::prelude::{Point3, Vector3};
+use crate::newton::Settings;
+use crate::newton::pair::{Frozen, free_sines};
+use crate::prelude::Point3;
 use crate::surface::SupportSurface;
-use nalgebra::{SMatrix, SVector};
 
 /// Samples per arc of the curve read from the file.
 const SAMPLES_PER_ARC: usize = 16;
@@ -50,7 +51,7 @@ const DEGREES: [usize; 4] = [4, 6, 8, 10];
 /// How often an arc above the target at the highest degree is halved.
 const MAX_HALVINGS: usize = 4;
 /// Smallest sine between the driving surface's free direction and the other surface's
-/// tangent plane (as for Eq. 12 in `intersect`).
+/// tangent plane ([`free_sines`], as for Eq. 12 in `intersect`).
 const MIN_SINE: f64 = 0.1;
 
 /// A junction rebuilt as the intersection of its supports.
@@ -74,79 +75,6 @@ struct Pair<'a> {
 impl Pair<'_> {
     fn point(&self, k: usize, y: &[f64; 4]) -> Point3 {
         self.s[k].point(y[2 * k], y[2 * k + 1])
-    }
-}
-
-/// ½|r₁(y) − r₂(y)|² over the three parameters other than the frozen one (Gauss–Newton
-/// Hessian); residual |r₁ − r₂|.
-struct Frozen<'a, 'b> {
-    pair: &'b Pair<'a>,
-    frozen: usize,
-    value: f64,
-}
-
-impl Frozen<'_, '_> {
-    fn full(&self, x: &[f64; 3]) -> [f64; 4] {
-        let mut y = [0.0; 4];
-        let mut k = 0;
-        for (i, yi) in y.iter_mut().enumerate() {
-            if i == self.frozen {
-                *yi = self.value;
-            } else {
-                *yi = x[k];
-                k += 1;
-            }
-        }
-        y
-    }
-
-    fn reduce(&self, y: &[f64; 4]) -> [f64; 3] {
-        let mut x = [0.0; 3];
-        let mut k = 0;
-        for (i, &yi) in y.iter().enumerate() {
-            if i != self.frozen {
-                x[k] = yi;
-                k += 1;
-            }
-        }
-        x
-    }
-}
-
-impl Problem<3> for Frozen<'_, '_> {
-    fn eval(&self, x: &[f64; 3], _active: &[bool; 3]) -> Eval<3> {
-        let y = self.full(x);
-        let a = self.pair.s[0].derivs(y[0], y[1]);
-        let b = self.pair.s[1].derivs(y[2], y[3]);
-        let r = a.point - b.point;
-        let cols = [a.du, a.dv, -b.du, -b.dv];
-        let mut j = SMatrix::<f64, 3, 3>::zeros();
-        let mut k = 0;
-        for (i, c) in cols.iter().enumerate() {
-            if i != self.frozen {
-                j.set_column(k, c);
-                k += 1;
-            }
-        }
-        let n = r.norm();
-        let g: SVector<f64, 3> = j.transpose() * r;
-        let h = j.transpose() * j;
-        if !n.is_finite() {
-            return Eval {
-                f: f64::INFINITY,
-                g,
-                h,
-                res: f64::INFINITY,
-                fnoise: 0.0,
-            };
-        }
-        Eval {
-            f: 0.5 * n * n,
-            g,
-            h,
-            res: n,
-            fnoise: 16.0 * f64::EPSILON * n * (a.point.coords.norm() + b.point.coords.norm()),
-        }
     }
 }
 
@@ -284,6 +212,10 @@ fn histories(pair: &Pair<'_>, arcs: &[Arc], scale: f64) -> Result<Vec<[f64; 4]>,
 
 /// The driving parameter (module doc, step 2), if any.
 fn driver(pair: &Pair<'_>, ys: &[[f64; 4]]) -> Option<usize> {
+    let sines: Vec<[f64; 4]> = ys
+        .iter()
+        .map(|y| free_sines(pair.s[0], pair.s[1], y))
+        .collect();
     let mut best: Option<(f64, usize)> = None;
     for k in 0..4 {
         let d: Vec<f64> = ys.windows(2).map(|w| w[1][k] - w[0][k]).collect();
@@ -291,28 +223,12 @@ fn driver(pair: &Pair<'_>, ys: &[[f64; 4]]) -> Option<usize> {
         if !monotonic {
             continue;
         }
-        let smin = ys
-            .iter()
-            .map(|y| free_sine(pair, y, k))
-            .fold(f64::INFINITY, f64::min);
+        let smin = sines.iter().map(|s| s[k]).fold(f64::INFINITY, f64::min);
         if smin >= MIN_SINE && best.is_none_or(|b| smin > b.0) {
             best = Some((smin, k));
         }
     }
     best.map(|b| b.1)
-}
-
-/// With parameter `k` frozen, the sine between the free direction of its surface and the
-/// other surface's tangent plane.
-fn free_sine(pair: &Pair<'_>, y: &[f64; 4], k: usize) -> f64 {
-    let (own, other) = (k / 2, 1 - k / 2);
-    let d = pair.s[own].derivs(y[2 * own], y[2 * own + 1]);
-    let free: Vector3 = if k.is_multiple_of(2) { d.dv } else { d.du };
-    let n = pair.s[other].normal(y[2 * other], y[2 * other + 1]);
-    match (n, free.norm()) {
-        (Some(n), f) if f > 0.0 => n.dot(&free).abs() / f,
-        _ => 0.0,
-    }
 }
 
 /// Values of the driving parameter strictly inside (p0, p1) where the curve crosses a patch
@@ -391,27 +307,15 @@ fn solve(
     y0: [f64; 4],
     tol: f64,
 ) -> Result<[f64; 4], String> {
-    let prob = Frozen {
-        pair,
-        frozen: driver,
-        value: p,
-    };
-    let lo = prob.reduce(&pair.lo);
-    let hi = prob.reduce(&pair.hi);
-    let o = minimise(
-        &prob,
-        prob.reduce(&y0),
-        &lo,
-        &hi,
-        Settings { tol, max_iters: 50 },
-    );
+    let prob = Frozen::new(pair.s[0], pair.s[1], driver, p);
+    let (y, o) = prob.solve(&y0, &pair.lo, &pair.hi, Settings { tol, max_iters: 50 });
     if !o.report.converged {
         return Err(format!(
             "the supports do not meet at driving parameter {p} (|r1 - r2| = {:.3e} after {} iterations)",
             o.report.residual, o.report.iterations
         ));
     }
-    Ok(prob.full(&o.x))
+    Ok(y)
 }
 
 /// Fits the span between the solved ends `a` and `b` (driving value, parameters), raising
