@@ -5,13 +5,15 @@
 //! Coarse space ([`CoarseSpace`], made once per set-up): each rank cuts its free unknowns
 //! (those without a sliding constraint) into `parts` aggregates by coordinate bisection,
 //! more when they would hold over [`COARSE_SIZE`] unknowns each (up to [`COARSE_MAX`]
-//! over the ranks);
-//! P has, per aggregate and per component, the vector that is 1 on the aggregate's unknowns
-//! and 0 elsewhere. The constrained unknowns are left out, so that P lies in the range of
-//! the constraints' projection Π and the coarse problem is that of the projected operator.
-//! Coarse operator ([`CoarseOp`], per matrix): the rows of A P on the owned unknowns (the
-//! ghosts' aggregates came once through the halo), A_c = Pᵀ A P gathered on every rank and
-//! factorised there by the envelope Cholesky of `sparse` in reverse Cuthill–McKee order.
+//! over the ranks); P₀ has, per aggregate and per component, the vector that is 1 on the
+//! aggregate's unknowns and 0 elsewhere.
+//! Coarse operator ([`CoarseOp`], per matrix): P = (I − ω D⁻¹ A) P₀, P₀ smoothed by one
+//! damped Jacobi step of the matrix as the serial multigrid's prolongator (its rows of the
+//! ghost unknowns come from their owners through the halo); the constrained unknowns keep
+//! P's row 0, so that P lies in the range of the constraints' projection Π and the coarse
+//! problem is that of the projected operator. The rows of A P on the owned unknowns, and
+//! A_c = Pᵀ A P gathered on every rank and factorised there by the envelope Cholesky of
+//! `sparse` in reverse Cuthill–McKee order.
 //!
 //! Preconditioner (balancing, Mandel's BNN; Tang, Nabben, Vuik, Erlangga 2009): with
 //! Q = P A_c⁻¹ Pᵀ and B the block preconditioner,
@@ -30,7 +32,7 @@ use sparse::envelope::EnvelopeCholesky;
 use sparse::order::reverse_cuthill_mckee;
 use sparse::{SymMatrix, V3};
 
-use super::comm::Comm;
+use super::comm::{Comm, max};
 use super::halo::Halo;
 use super::rcb::rcb;
 use super::solve::DistOperator;
@@ -105,12 +107,28 @@ fn per_rank(parts: usize, free: usize, p: usize) -> usize {
     parts.max(by_size).min(free)
 }
 
-/// The coarse operator of one matrix: the owned rows of A P and the factor of A_c.
+/// Entries kept per row of the smoothed prolongator, which the halo brings to the ranks
+/// that hold the row's unknown as a ghost (a fixed width: the halo's vectors are arrays).
+/// A row of (I − ω D⁻¹ A) P₀ has the aggregates of its unknown's neighbours, ~2–5 with
+/// aggregates of ~500 unknowns; beyond this width the smallest entries are dropped (on the
+/// owner too: every rank holds the same row, and any P gives a valid coarse space).
+const P_WIDTH: usize = 8;
+
+/// c_P of the coarse space's smoothing: ω = c_P / ρ, ρ the Gershgorin bound of ρ(D⁻¹A)
+/// over the ranks, as the serial multigrid's prolongator smoothing.
+const P_DAMPING: f64 = 1.6;
+
+/// The coarse operator of one matrix: the smoothed prolongator P = (I − ω D⁻¹ A) P₀ (P₀ the
+/// aggregates' indicator) on the local unknowns, the owned rows of A P, and the factor of
+/// A_c = Pᵀ A P.
 pub(crate) struct CoarseOp {
-    /// The space's aggregates.
-    agg: Arc<[u32]>,
     /// Aggregates over the ranks.
     n: usize,
+    /// Row offsets of P (owned unknowns).
+    p_off: Vec<usize>,
+    /// Aggregates (columns) and values of P.
+    p_col: Vec<u32>,
+    p_val: Vec<f64>,
     /// Row offsets of A P (owned unknowns).
     off: Vec<usize>,
     /// Aggregates (columns) of A P.
@@ -121,49 +139,160 @@ pub(crate) struct CoarseOp {
 }
 
 impl CoarseOp {
-    /// A P on the owned rows of `a` (`n_own` rows; columns: local unknowns), and A_c = Pᵀ A P
-    /// gathered and factorised on every rank. Collective; an error (A_c not positive
-    /// definite) is the same on every rank.
-    pub fn new(comm: &Comm, space: &CoarseSpace, a: &DistOperator, n_own: usize) -> Result<Self> {
+    /// P smoothed by `a` (its ghost rows brought by `halo` from their owners), A P on the
+    /// owned rows of `a` (`n_own` rows; columns: local unknowns), and A_c = Pᵀ A P gathered
+    /// and factorised on every rank. Collective; an error (A_c not positive definite) is the
+    /// same on every rank.
+    ///
+    /// The constrained (sliding) unknowns keep P's row 0, so that P stays in the range of
+    /// the constraints' projection. Against the piecewise-constant P₀, smoothing took the
+    /// Eq. 21 + Eq. 26 iterations at 98k nodes from 28 + 23, 30 + 26, 30 + 27 on 2, 3, 4
+    /// ranks to 26 + 23, 24 + 23, 26 + 24, and at 1M nodes on 2 ranks from 47 + 32 to
+    /// 38 + 28 (docs/perf-log/2026-12-03-mpi-round3.md).
+    pub fn new(
+        comm: &Comm,
+        halo: &Halo,
+        space: &CoarseSpace,
+        a: &DistOperator,
+        n_own: usize,
+    ) -> Result<Self> {
         let agg = &space.agg;
         let diag = a.diag();
-        let (mut off, mut col, mut val) = (vec![0], Vec::new(), Vec::new());
-        let mut buf: Vec<(u32, f64)> = Vec::new();
-        // Pᵀ A P's entries of the owned rows: (I, J, value), merged per row.
-        let (mut ti, mut tj, mut tv) = (Vec::new(), Vec::new(), Vec::new());
+        // ω from the Gershgorin bound of D⁻¹A over the ranks.
+        let mut rho = 0.0f64;
         for k in 0..n_own {
-            buf.clear();
-            if agg[k] != NONE {
-                buf.push((agg[k], diag[k]));
+            let mut s = 0.0;
+            a.row_entries(k, |_, v| s += v.abs());
+            rho = rho.max(1.0 + s / diag[k]);
+        }
+        let rho = max(comm, rho);
+        let omega = if rho > 0.0 { P_DAMPING / rho } else { 0.0 };
+        // P's owned rows, packed for the halo as (aggregate, value) pairs.
+        let mut empty = [0.0f64; 2 * P_WIDTH];
+        for e in 0..P_WIDTH {
+            empty[2 * e] = f64::from(NONE);
+        }
+        let mut rows = vec![empty; agg.len()];
+        let mut buf: Vec<(u32, f64)> = Vec::new();
+        for k in 0..n_own {
+            let row = &mut rows[k];
+            if agg[k] == NONE {
+                continue;
             }
+            buf.clear();
+            buf.push((agg[k], 1.0 - omega));
+            let s = omega / diag[k];
             a.row_entries(k, |c, v| {
                 let g = agg[c];
                 if g != NONE {
-                    buf.push((g, v));
+                    buf.push((g, -s * v));
+                }
+            });
+            merge_row(&mut buf);
+            if buf.len() > P_WIDTH {
+                // The largest entries (ties by aggregate), then back in aggregate order.
+                buf.sort_by(|x, y| y.1.abs().total_cmp(&x.1.abs()).then(x.0.cmp(&y.0)));
+                buf.truncate(P_WIDTH);
+                buf.sort_by_key(|e| e.0);
+            }
+            for (e, &(g, v)) in buf.iter().enumerate() {
+                row[2 * e] = f64::from(g);
+                row[2 * e + 1] = v;
+            }
+        }
+        halo.exchange(comm, &mut rows);
+        let (mut p_off, mut p_col, mut p_val) = (vec![0], Vec::new(), Vec::new());
+        for row in &rows {
+            for e in 0..P_WIDTH {
+                let g = row[2 * e] as u32;
+                if g != NONE {
+                    p_col.push(g);
+                    p_val.push(row[2 * e + 1]);
+                }
+            }
+            p_off.push(p_col.len());
+        }
+        drop(rows);
+        // A P on the owned rows.
+        let (mut off, mut col, mut val) = (vec![0], Vec::new(), Vec::new());
+        for k in 0..n_own {
+            buf.clear();
+            let d = diag[k];
+            for e in p_off[k]..p_off[k + 1] {
+                buf.push((p_col[e], d * p_val[e]));
+            }
+            a.row_entries(k, |c, v| {
+                for e in p_off[c]..p_off[c + 1] {
+                    buf.push((p_col[e], v * p_val[e]));
                 }
             });
             merge_row(&mut buf);
             for &(g, v) in &buf {
                 col.push(g);
                 val.push(v);
-                if agg[k] != NONE {
-                    ti.push(agg[k]);
-                    tj.push(g);
-                    tv.push(v);
-                }
             }
             off.push(col.len());
         }
+        // Pᵀ A P's rows of this rank's owned unknowns: per aggregate I, Σ_k P_kI (A P)_k over
+        // the owned rows k whose P has I (P transposed, then a dense accumulator per row).
+        let n = space.n;
+        let mut cnt = vec![0usize; n + 1];
+        for &g in &p_col[..p_off[n_own]] {
+            cnt[g as usize + 1] += 1;
+        }
+        for i in 0..n {
+            cnt[i + 1] += cnt[i];
+        }
+        let mut at = cnt.clone();
+        let mut pt = vec![(0u32, 0.0f64); p_off[n_own]];
+        for k in 0..n_own {
+            for e in p_off[k]..p_off[k + 1] {
+                let g = p_col[e] as usize;
+                pt[at[g]] = (k as u32, p_val[e]);
+                at[g] += 1;
+            }
+        }
+        let (mut ti, mut tj, mut tv) = (Vec::new(), Vec::new(), Vec::new());
+        let mut acc = vec![0.0f64; n];
+        let mut hit = vec![false; n];
+        let mut touched: Vec<u32> = Vec::new();
+        for i in 0..n {
+            for &(k, p) in &pt[cnt[i]..cnt[i + 1]] {
+                let k = k as usize;
+                for e in off[k]..off[k + 1] {
+                    let j = col[e] as usize;
+                    if !hit[j] {
+                        hit[j] = true;
+                        touched.push(j as u32);
+                    }
+                    acc[j] += p * val[e];
+                }
+            }
+            touched.sort_unstable();
+            for &j in &touched {
+                ti.push(i as u32);
+                tj.push(j);
+                tv.push(acc[j as usize]);
+                acc[j as usize] = 0.0;
+                hit[j as usize] = false;
+            }
+            touched.clear();
+        }
         let (ti, tj, tv) = gather_all(comm, &ti, &tj, &tv);
-        let ac = coarse_matrix(space.n, &ti, &tj, &tv);
+        let ac = coarse_matrix(n, &ti, &tj, &tv);
         let perm = reverse_cuthill_mckee(ac.n(), |i| ac.row(i).0);
         let chol = EnvelopeCholesky::new(&ac, &perm).map_err(|e| Error::Distributed {
             rank: comm.rank(),
-            reason: format!("coarse-grid matrix ({} aggregates): {e}", space.n),
+            reason: format!("coarse-grid matrix ({n} aggregates): {e}"),
         })?;
+        p_off.truncate(n_own + 1);
+        p_col.truncate(p_off[n_own]);
+        p_val.truncate(p_off[n_own]);
         Ok(Self {
-            agg: space.agg.clone(),
-            n: space.n,
+            n,
+            p_off,
+            p_col,
+            p_val,
             off,
             col,
             val,
@@ -188,10 +317,10 @@ impl CoarseOp {
     pub fn coarse_of(&self, comm: &Comm, r: &[V3]) -> Vec<V3> {
         let mut t = vec![0.0; 3 * self.n];
         for (k, rk) in r.iter().enumerate() {
-            let g = self.agg[k];
-            if g != NONE {
+            for e in self.p_off[k]..self.p_off[k + 1] {
+                let (g, p) = (self.p_col[e] as usize, self.p_val[e]);
                 for q in 0..3 {
-                    t[3 * g as usize + q] += rk[q];
+                    t[3 * g + q] += p * rk[q];
                 }
             }
         }
@@ -227,10 +356,10 @@ impl CoarseOp {
     /// z += P c on the owned unknowns.
     pub fn add_prolonged(&self, c: &[V3], z: &mut [V3]) {
         for (k, zk) in z.iter_mut().enumerate() {
-            let g = self.agg[k];
-            if g != NONE {
+            for e in self.p_off[k]..self.p_off[k + 1] {
+                let (g, p) = (self.p_col[e] as usize, self.p_val[e]);
                 for q in 0..3 {
-                    zk[q] += c[g as usize][q];
+                    zk[q] += p * c[g][q];
                 }
             }
         }

@@ -11,13 +11,13 @@ use mesh::{Elements, Marker, Mesh};
 use mpi::datatype::PartitionMut;
 use mpi::traits::*;
 use serde::Serialize;
-use sparse::{Constraints, V3, order};
+use sparse::{Constraints, V3};
 
 use super::coarse::{CoarseOp, CoarseSpace};
 use super::comm::{Comm, agree, max, min, sum_u64};
 use super::halo::Halo;
 use super::metis::Partitioner;
-use super::partition::{LocalGrid, Partition};
+use super::partition::{LocalGrid, Partition, locality_order};
 use super::rfield::{Ctx, rotations};
 use super::scatter::Local;
 use super::slide::{self, Slide};
@@ -135,43 +135,6 @@ pub struct Deformer<'c> {
     slide: Option<Slide>,
     /// The weight φ of R per local node (the reach of R; empty: 1 everywhere).
     reach: Vec<f64>,
-}
-
-/// The owned unknowns' nodes `nodes` renumbered as the serial solver numbers the grid
-/// (`crate::Deformer`'s renumbering): along a Morton curve, then breadth-first over the
-/// graph of the owned unknowns, so that a row's neighbours lie close in memory. The
-/// product, the multigrid's set-up and its cycle then run at the serial solver's speed: in
-/// the order of a Gmsh-made grid's nodes (scattered over the volume) one rank took ~3×
-/// the serial time per iteration (docs/perf-log/2026-12-03-mpi-round2.md).
-fn locality_order(nodes: &[u32], adj: &mesh::Adjacency, coords: &[[f64; 3]]) -> Vec<u32> {
-    let m = nodes.len();
-    if m < 2 {
-        return nodes.to_vec();
-    }
-    let mut at = vec![u32::MAX; coords.len()];
-    for (k, &i) in nodes.iter().enumerate() {
-        at[i as usize] = k as u32;
-    }
-    let (mut off, mut nb) = (Vec::with_capacity(m + 1), Vec::new());
-    off.push(0usize);
-    for &i in nodes {
-        nb.extend(
-            adj.neighbours(i as usize)
-                .iter()
-                .map(|&j| at[j as usize])
-                .filter(|&a| a != u32::MAX),
-        );
-        off.push(nb.len());
-    }
-    let xs: Vec<[f64; 3]> = nodes.iter().map(|&i| coords[i as usize]).collect();
-    let morton = order::morton_order(&xs);
-    let g = order::permute_graph(m, |k| &nb[off[k]..off[k + 1]], &morton);
-    let level = order::level_order(m, |a| &g.adj[g.offsets[a]..g.offsets[a + 1]]);
-    let mut out = vec![0u32; m];
-    for (&i, &p) in nodes.iter().zip(&order::then(&morton, &level)) {
-        out[p as usize] = i;
-    }
-    out
 }
 
 /// True when this rank counts the element `e` of its local grid: it owns the element's node
@@ -294,7 +257,13 @@ impl<'c> Deformer<'c> {
             .filter(|&i| is_unk(i))
             .map(|i| i as u32)
             .collect();
-        let node_of = locality_order(&node_of, &part.adj, &part.grid.mesh.coords);
+        // A part made on rank 0 is numbered in locality order already (its unknowns keep
+        // the nodes' order); a given part's unknowns are renumbered.
+        let node_of = if part.in_order {
+            node_of
+        } else {
+            locality_order(&node_of, &part.adj, &part.grid.mesh.coords)
+        };
         let mut ghost: Vec<u32> = (n_owned..n)
             .filter(|&i| is_unk(i))
             .map(|i| i as u32)
@@ -555,7 +524,7 @@ impl<'c> Deformer<'c> {
         let op = DistOperator::new(sys, &part.adj, &sp, sys.node_of.len(), opts, overlap);
         let mut op = agree(comm, op)?;
         if let Some(space) = coarse {
-            let c = CoarseOp::new(comm, space, &op, sys.node_of.len());
+            let c = CoarseOp::new(comm, &self.unk_halo, space, &op, sys.node_of.len());
             op.coarse = Some(agree(comm, c)?);
         }
         sec.assemble += t.elapsed().as_secs_f64();

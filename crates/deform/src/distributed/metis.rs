@@ -10,6 +10,7 @@
 //! depend on the thread count.
 
 use mesh::{Adjacency, Mesh};
+use sparse::order;
 
 use super::rcb::rcb;
 
@@ -68,6 +69,11 @@ pub struct Cut {
 /// The nodes of `mesh` cut into `parts` parts by `by`; METIS falls back on coordinate
 /// bisection, with the reason in [`Cut::fallback`].
 pub fn cut(mesh: &Mesh, parts: usize, by: Partitioner) -> Cut {
+    cut_in(mesh, parts, by, &order::morton_order(&mesh.coords))
+}
+
+/// [`cut`], METIS working on the grid renumbered by `perm` ([`metis_in`]).
+pub(crate) fn cut_in(mesh: &Mesh, parts: usize, by: Partitioner, perm: &[u32]) -> Cut {
     let bisect = |fallback| Cut {
         part: rcb(&mesh.coords, parts),
         by: Partitioner::Rcb,
@@ -75,7 +81,7 @@ pub fn cut(mesh: &Mesh, parts: usize, by: Partitioner) -> Cut {
     };
     match by {
         Partitioner::Rcb => bisect(None),
-        Partitioner::Metis => match metis(mesh, parts) {
+        Partitioner::Metis => match metis_in(mesh, parts, perm) {
             Ok(part) => Cut {
                 part,
                 by: Partitioner::Metis,
@@ -90,6 +96,17 @@ pub fn cut(mesh: &Mesh, parts: usize, by: Partitioner) -> Cut {
 /// (every part holding nodes); an error when METIS cannot take the graph or fails, or leaves
 /// a part without nodes.
 pub fn metis(mesh: &Mesh, parts: usize) -> std::result::Result<Vec<u32>, String> {
+    metis_in(mesh, parts, &order::morton_order(&mesh.coords))
+}
+
+/// [`metis`] on the node graph of `mesh` renumbered by `perm` (`perm[old] = new`; a Morton
+/// order: the graph is then built from nearby memory, where a Gmsh grid's own order reads
+/// every node's neighbours from all over the grid); the parts in the numbering of `mesh`.
+pub(crate) fn metis_in(
+    mesh: &Mesh,
+    parts: usize,
+    perm: &[u32],
+) -> std::result::Result<Vec<u32>, String> {
     let n = mesh.n_nodes();
     if parts <= 1 {
         return Ok(vec![0; n]);
@@ -97,7 +114,40 @@ pub fn metis(mesh: &Mesh, parts: usize) -> std::result::Result<Vec<u32>, String>
     if n < parts {
         return Err(format!("{n} nodes for {parts} parts"));
     }
-    let adj = Adjacency::try_build(mesh).map_err(|e| e.to_string())?;
+    if mesh.cells.len() > mesh::adjacency::MAX_ELEMENTS {
+        return Err(format!(
+            "{} cells: more than the adjacency takes",
+            mesh.cells.len()
+        ));
+    }
+    // The cells renumbered, each group's in the order of their smallest node.
+    let mut cells = mesh::Elements::new();
+    for g in mesh.cells.groups() {
+        let nn = g.kind.n_nodes();
+        let mut by_node: Vec<(u32, u32)> = g
+            .nodes
+            .chunks_exact(nn)
+            .enumerate()
+            .map(|(c, e)| {
+                let lo = e.iter().map(|&v| perm[v as usize]).min();
+                (lo.unwrap_or(0), c as u32)
+            })
+            .collect();
+        by_node.sort_unstable();
+        let mut e = Vec::with_capacity(nn);
+        for (_, c) in by_node {
+            let c = c as usize;
+            e.clear();
+            e.extend(
+                g.nodes[c * nn..(c + 1) * nn]
+                    .iter()
+                    .map(|&v| perm[v as usize]),
+            );
+            cells.push(g.kind, &e, None);
+        }
+    }
+    let adj = Adjacency::from_elements(n, &cells);
+    drop(cells);
     let wide = || {
         format!(
             "{} edge ends: beyond METIS's 32-bit indices",
@@ -133,7 +183,7 @@ pub fn metis(mesh: &Mesh, parts: usize) -> std::result::Result<Vec<u32>, String>
     if let Some(q) = count.iter().position(|&c| c == 0) {
         return Err(format!("METIS left part {q} of {parts} without nodes"));
     }
-    Ok(part.into_iter().map(|q| q as u32).collect())
+    Ok(perm.iter().map(|&p| part[p as usize] as u32).collect())
 }
 
 #[cfg(test)]

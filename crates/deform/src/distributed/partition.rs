@@ -11,6 +11,8 @@ use std::collections::HashMap;
 use mesh::{Adjacency, Mesh};
 use mpi::traits::*;
 
+use sparse::order;
+
 use super::comm::{Comm, agree, all_to_all, sum_u64};
 use super::halo::Halo;
 use crate::error::{Error, Result};
@@ -40,6 +42,8 @@ pub struct Partition {
     pub(crate) adj: Adjacency,
     /// Ghost node values from their owners.
     pub(crate) halo: Halo,
+    /// The owned nodes were renumbered in locality order ([`Partition::ordered`]).
+    pub(crate) in_order: bool,
 }
 
 fn fail(comm: &Comm, reason: String) -> Error {
@@ -56,6 +60,19 @@ impl Partition {
     /// node outside its part, or a missing ghost (a cell around an owned node that is not on
     /// the owner).
     pub fn new(comm: &Comm, grid: LocalGrid) -> Result<Self> {
+        Self::build(comm, grid, false).map(|p| p.0)
+    }
+
+    /// [`Partition::new`], then the owned nodes renumbered as the serial solver numbers a
+    /// grid ([`locality_order`]; the ghosts keep their order), for a part whose numbering is
+    /// the library's own (made on rank 0). Returns the renumbering (`perm[old] = new`, the
+    /// convention of `sparse::order`).
+    pub(crate) fn ordered(comm: &Comm, grid: LocalGrid) -> Result<(Self, Vec<u32>)> {
+        let (p, perm) = Self::build(comm, grid, true)?;
+        Ok((p, perm.unwrap_or_default()))
+    }
+
+    fn build(comm: &Comm, mut grid: LocalGrid, reorder: bool) -> Result<(Self, Option<Vec<u32>>)> {
         let n = grid.mesh.n_nodes();
         let me = comm.rank();
         let p = comm.size() as usize;
@@ -189,6 +206,33 @@ impl Partition {
             }
         }
         agree(comm, missing)?;
+        drop(local_of);
+        let mut adj = adj;
+        let perm = reorder.then(|| {
+            let owned: Vec<u32> = (0..grid.n_owned as u32).collect();
+            let order = locality_order(&owned, &adj, &grid.mesh.coords);
+            let mut perm: Vec<u32> = (0..n as u32).collect();
+            for (new, &old) in order.iter().enumerate() {
+                perm[old as usize] = new as u32;
+            }
+            perm
+        });
+        if let Some(perm) = &perm {
+            grid.mesh
+                .renumber_nodes(perm)
+                .map_err(|e| fail(comm, e.to_string()))?;
+            let (mut g, mut o) = (vec![0u64; n], vec![0i32; n]);
+            for (i, &p) in perm.iter().enumerate() {
+                g[p as usize] = grid.global_ids[i];
+                o[p as usize] = owner[i];
+            }
+            (grid.global_ids, owner) = (g, o);
+            let g = order::permute_graph(n, |i| adj.neighbours(i), perm);
+            adj = Adjacency {
+                offsets: g.offsets,
+                indices: g.adj,
+            };
+        }
         let ghosts: Vec<(u32, i32, u64)> = (grid.n_owned..n)
             .map(|i| (i as u32, owner[i], grid.global_ids[i]))
             .collect();
@@ -196,13 +240,17 @@ impl Partition {
             .map(|i| (grid.global_ids[i], i as u32))
             .collect();
         let halo = agree(comm, Halo::build(comm, &ghosts, &owned))?;
-        Ok(Self {
-            grid,
-            owner,
-            n_global,
-            adj,
-            halo,
-        })
+        Ok((
+            Self {
+                grid,
+                owner,
+                n_global,
+                adj,
+                halo,
+                in_order: reorder,
+            },
+            perm,
+        ))
     }
 
     /// The local grid.
@@ -214,4 +262,42 @@ impl Partition {
     pub fn n_global(&self) -> u64 {
         self.n_global
     }
+}
+
+/// The nodes `nodes` renumbered as the serial solver numbers the grid
+/// (`crate::Deformer`'s renumbering): along a Morton curve, then breadth-first over the
+/// graph of `nodes`, so that a row's neighbours lie close in memory; returns the nodes in
+/// their new order. The product, the multigrid's set-up and its cycle then run at the
+/// serial solver's speed: in the order of a Gmsh-made grid's nodes (scattered over the
+/// volume) one rank took ~3× the serial time per iteration
+/// (docs/perf-log/2026-12-03-mpi-round2.md).
+pub(crate) fn locality_order(nodes: &[u32], adj: &Adjacency, coords: &[[f64; 3]]) -> Vec<u32> {
+    let m = nodes.len();
+    if m < 2 {
+        return nodes.to_vec();
+    }
+    let mut at = vec![u32::MAX; coords.len()];
+    for (k, &i) in nodes.iter().enumerate() {
+        at[i as usize] = k as u32;
+    }
+    let (mut off, mut nb) = (Vec::with_capacity(m + 1), Vec::new());
+    off.push(0usize);
+    for &i in nodes {
+        nb.extend(
+            adj.neighbours(i as usize)
+                .iter()
+                .map(|&j| at[j as usize])
+                .filter(|&a| a != u32::MAX),
+        );
+        off.push(nb.len());
+    }
+    let xs: Vec<[f64; 3]> = nodes.iter().map(|&i| coords[i as usize]).collect();
+    let morton = order::morton_order(&xs);
+    let g = order::permute_graph(m, |k| &nb[off[k]..off[k + 1]], &morton);
+    let level = order::level_order(m, |a| &g.adj[g.offsets[a]..g.offsets[a + 1]]);
+    let mut out = vec![0u32; m];
+    for (&i, &p) in nodes.iter().zip(&order::then(&morton, &level)) {
+        out[p as usize] = i;
+    }
+    out
 }

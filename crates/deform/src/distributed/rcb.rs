@@ -54,8 +54,23 @@ fn split(x: &[[f64; 3]], idx: &mut [u32], first: u32, parts: usize, part: &mut [
 /// The parts of `mesh` for the node partition `part` (`parts` parts): for each, its owned
 /// nodes (increasing global id = node index of `mesh`), then its ghosts (increasing global
 /// id), the cells with an owned node, and the marker elements whose nodes are all local.
+/// The global ids are the nodes' indices in `mesh`.
 pub fn parts(mesh: &Mesh, part: &[u32], parts: usize) -> Vec<LocalGrid> {
+    let order: Vec<u32> = (0..mesh.n_nodes() as u32).collect();
+    parts_in(mesh, part, parts, &order)
+}
+
+/// [`parts`] with each part's owned nodes, and its ghosts, in the order of `order` (the
+/// nodes of `mesh` listed in that order, e.g. along a Morton curve: a part's nodes then lie
+/// close in memory, and the adjacency each rank builds of its part reads its neighbours
+/// from nearby instead of from all over the grid).
+pub(crate) fn parts_in(mesh: &Mesh, part: &[u32], parts: usize, order: &[u32]) -> Vec<LocalGrid> {
     let n = mesh.n_nodes();
+    // The place of every node in `order`.
+    let mut rank_of = vec![0u32; n];
+    for (k, &i) in order.iter().enumerate() {
+        rank_of[i as usize] = k as u32;
+    }
     // The cells of each part, by kind (cell indices within the group).
     let mut cells: Vec<Vec<Vec<usize>>> = vec![vec![Vec::new(); mesh.cells.groups().len()]; parts];
     for (gk, g) in mesh.cells.groups().iter().enumerate() {
@@ -75,8 +90,10 @@ pub fn parts(mesh: &Mesh, part: &[u32], parts: usize) -> Vec<LocalGrid> {
     let mut local = vec![u32::MAX; n];
     (0..parts)
         .map(|q| {
-            let mut gids: Vec<u64> = (0..n as u64)
-                .filter(|&i| part[i as usize] == q as u32)
+            let mut gids: Vec<u64> = order
+                .iter()
+                .filter(|&&i| part[i as usize] == q as u32)
+                .map(|&i| u64::from(i))
                 .collect();
             let n_owned = gids.len();
             let mut ghosts = Vec::new();
@@ -89,7 +106,7 @@ pub fn parts(mesh: &Mesh, part: &[u32], parts: usize) -> Vec<LocalGrid> {
                     }
                 }
             }
-            ghosts.sort_unstable();
+            ghosts.sort_unstable_by_key(|&g| rank_of[g as usize]);
             ghosts.dedup();
             gids.extend(ghosts);
             for (k, &g) in gids.iter().enumerate() {
@@ -97,9 +114,20 @@ pub fn parts(mesh: &Mesh, part: &[u32], parts: usize) -> Vec<LocalGrid> {
             }
             let mut m = Mesh::new(mesh.dim);
             m.coords = gids.iter().map(|&g| mesh.coords[g as usize]).collect();
+            let mut e = Vec::with_capacity(8);
             for (gk, g) in mesh.cells.groups().iter().enumerate() {
-                for &c in &cells[q][gk] {
-                    let e: Vec<u32> = g.element(c).iter().map(|&v| local[v as usize]).collect();
+                // By their smallest local node: a node's cells then lie close in memory.
+                let mut by_node: Vec<(u32, u32)> = cells[q][gk]
+                    .iter()
+                    .map(|&c| {
+                        let lo = g.element(c).iter().map(|&v| local[v as usize]).min();
+                        (lo.unwrap_or(0), c as u32)
+                    })
+                    .collect();
+                by_node.sort_unstable();
+                for c in by_node.into_iter().map(|(_, c)| c as usize) {
+                    e.clear();
+                    e.extend(g.element(c).iter().map(|&v| local[v as usize]));
                     m.cells.push(g.kind, &e, None);
                 }
             }

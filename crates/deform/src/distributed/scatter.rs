@@ -7,11 +7,12 @@
 
 use mesh::{ElementKind, Mesh};
 use mpi::traits::*;
+use sparse::order;
 
 use super::comm::{Comm, agree};
-use super::metis::{Partitioner, cut};
+use super::metis::{Partitioner, cut_in};
 use super::partition::{LocalGrid, Partition};
-use super::rcb::parts;
+use super::rcb::parts_in;
 use crate::bc::{BoundaryConditions, Classified, MarkerRole, NodeRole, RigidMotion, classify};
 use crate::error::{Error, Result};
 use crate::options::DeformOptions;
@@ -107,8 +108,11 @@ impl Local {
                 if opts.rotation_reach.is_some_and(f64::is_finite) {
                     root_boundary = crate::deformer::moving_boundary(m, bc, &cls);
                 }
-                let c = cut(m, p, by);
-                let grids = parts(m, &c.part, p);
+                // The nodes along a Morton curve: METIS's graph and each part are built
+                // in that order (from nearby memory; a Gmsh grid's order is scattered).
+                let morton = order::morton_order(&m.coords);
+                let c = cut_in(m, p, by, &morton);
+                let grids = parts_in(m, &c.part, p, &order::inverse(&morton));
                 let pieces: Vec<Piece> = grids.iter().map(|g| encode(g, &cls, bc)).collect();
                 let how: u64 = match (c.by, c.fallback) {
                     (Partitioner::Metis, _) => 1,
@@ -148,8 +152,20 @@ impl Local {
             rank: 0,
             reason: "no part received".into(),
         })?;
-        let (grid, cls, disp) = agree(comm, decode(&ints, &floats))?;
-        let part = Partition::new(comm, grid)?;
+        let (grid, mut cls, disp) = agree(comm, decode(&ints, &floats))?;
+        drop((ints, floats));
+        // The part's numbering is ours: its owned nodes take the serial solver's order.
+        let (part, perm) = Partition::ordered(comm, grid)?;
+        let mut roles = cls.roles.clone();
+        for (i, &p) in perm.iter().enumerate() {
+            roles[p as usize] = cls.roles[i];
+        }
+        cls.roles = roles;
+        for e in &mut cls.skin {
+            for v in e.iter_mut() {
+                *v = perm[*v as usize];
+            }
+        }
         Ok(Self {
             part,
             cls,
@@ -208,8 +224,18 @@ fn owners_roles(comm: &Comm, part: &Partition, cls: &mut Classified, disp: &mut 
 /// A part and its nodes' roles as integers and floats (what rank 0 sends).
 fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> (Vec<u64>, Vec<f64>) {
     let n = g.mesh.n_nodes();
-    let mut ints = vec![n as u64, g.n_owned as u64, u64::from(g.mesh.dim)];
-    let mut floats: Vec<f64> = g.mesh.coords.iter().flatten().copied().collect();
+    let conn: usize = g
+        .mesh
+        .cells
+        .groups()
+        .iter()
+        .map(|grp| grp.nodes.len() + 2)
+        .sum();
+    let skin: usize = cls.skin.iter().map(|e| e.len() + 1).sum();
+    let mut ints = Vec::with_capacity(5 + 3 * n + conn + skin);
+    ints.extend([n as u64, g.n_owned as u64, u64::from(g.mesh.dim)]);
+    let mut floats: Vec<f64> = Vec::with_capacity(6 * n + 10 * cls.motions.len());
+    floats.extend(g.mesh.coords.iter().flatten());
     ints.extend(&g.global_ids);
     ints.push(g.mesh.cells.groups().len() as u64);
     for grp in g.mesh.cells.groups() {
