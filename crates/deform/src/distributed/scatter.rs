@@ -123,7 +123,7 @@ impl Local {
             })();
             // The others wait for their part only when rank 0 has made them.
             let mut ok = made.as_ref().map_or(0, |m| m.1);
-            root.broadcast_into(&mut ok);
+            broadcast_idle(comm, &mut ok);
             made.map(|(mut pieces, how)| {
                 for (r, piece) in pieces.iter().enumerate().skip(1) {
                     let dest = comm.process_at_rank(r as i32);
@@ -135,7 +135,7 @@ impl Local {
             })
         } else {
             let mut ok = 0u64;
-            root.broadcast_into(&mut ok);
+            broadcast_idle(comm, &mut ok);
             if ok > 0 {
                 let mut len = [0u64; 2];
                 root.receive_into(&mut len[..]);
@@ -175,6 +175,26 @@ impl Local {
             root_boundary,
         })
     }
+}
+
+/// Broadcasts `v` from rank 0, the other ranks waiting for it without keeping a core busy
+/// (a blocking broadcast polls: while rank 0 cuts and encodes the grid, for seconds, the
+/// waiting ranks would take the CPU time rank 0 needs on a shared or oversubscribed
+/// machine). Collective.
+fn broadcast_idle(comm: &Comm, v: &mut u64) {
+    let root = comm.process_at_rank(0);
+    mpi::request::scope(|sc| {
+        let mut req = root.immediate_broadcast_into(sc, v);
+        loop {
+            match req.test() {
+                Ok(_) => break,
+                Err(r) => {
+                    req = r;
+                    std::thread::sleep(std::time::Duration::from_millis(2));
+                }
+            }
+        }
+    });
 }
 
 const FREE: u64 = 0;
