@@ -10,7 +10,6 @@ use std::collections::HashMap;
 
 use mesh::{Adjacency, Mesh};
 use mpi::traits::*;
-
 use sparse::order;
 
 use super::comm::{Comm, agree, all_to_all, sum_u64};
