@@ -103,6 +103,35 @@ fn first_line(o: &std::process::Output) -> String {
         .to_string()
 }
 
+/// `aeroshape deform GRID -o OUT --report REPORT FLAGS…`'s arguments.
+fn deform_args(grid: &str, out: &Path, report: &Path, flags: &[String]) -> Vec<String> {
+    let mut args = vec!["deform".to_string(), grid.to_string(), "-o".into()];
+    args.push(out.display().to_string());
+    args.extend(["--report".into(), report.display().to_string()]);
+    args.extend(flags.iter().cloned());
+    args
+}
+
+/// Runs `bin` serially with `args` (printed first); an error naming `what` and the first
+/// line of its standard error when it fails.
+fn run_serial<S: AsRef<std::ffi::OsStr> + std::fmt::Display>(
+    bin: &Path,
+    args: &[S],
+    what: &str,
+) -> Result<(), String> {
+    let shown: Vec<String> = args.iter().map(ToString::to_string).collect();
+    eprintln!("$ aeroshape {}", shown.join(" "));
+    let st = Command::new(bin)
+        .args(args)
+        .output()
+        .map_err(|e| format!("{}: {e}", bin.display()))?;
+    if st.status.success() {
+        Ok(())
+    } else {
+        Err(format!("{what} failed: {}", first_line(&st)))
+    }
+}
+
 /// Runs the checks with the program `bin` (built with the feature `mpi`); drifts are pushed
 /// on `drift`.
 pub fn run(root: &Path, bin: &Path, drift: &mut Vec<String>) -> Result<(), String> {
@@ -121,50 +150,25 @@ pub fn run(root: &Path, bin: &Path, drift: &mut Vec<String>) -> Result<(), Strin
         ],
         vec!["mesh", "convert", &grid, base.to_str().unwrap_or("")],
     ] {
-        eprintln!("$ aeroshape {}", args.join(" "));
-        let st = Command::new(bin)
-            .args(&args)
-            .output()
-            .map_err(|e| format!("{}: {e}", bin.display()))?;
-        if !st.status.success() {
-            return Err(format!(
-                "aeroshape {} {} failed: {}",
-                args[0],
-                args[1],
-                first_line(&st)
-            ));
-        }
+        run_serial(bin, &args, &format!("aeroshape {} {}", args[0], args[1]))?;
     }
     let x0 = su2_points(&base)?;
     for case in cases(&geometry) {
         let serial = out.join(format!("{}-serial.su2", case.name));
         let srep = out.join(format!("{}-serial.json", case.name));
-        let mut args = vec!["deform".to_string(), grid.clone(), "-o".into()];
-        args.push(serial.display().to_string());
-        args.extend(["--report".into(), srep.display().to_string()]);
-        args.extend(case.flags.iter().cloned());
-        eprintln!("$ aeroshape {}", args.join(" "));
-        let st = Command::new(bin)
-            .args(&args)
-            .output()
-            .map_err(|e| format!("{}: {e}", bin.display()))?;
-        if !st.status.success() {
-            return Err(format!(
-                "serial aeroshape deform ({}) failed: {}",
-                case.name,
-                first_line(&st)
-            ));
-        }
+        let args = deform_args(&grid, &serial, &srep, &case.flags);
+        run_serial(
+            bin,
+            &args,
+            &format!("serial aeroshape deform ({})", case.name),
+        )?;
         let xs = su2_points(&serial)?;
         let sr = report(&srep)?;
         let sliding = sr["deform"]["sliding_on_supports"].as_u64().unwrap_or(0);
         for n in [2usize, 3] {
             let o = out.join(format!("{}-ranks{n}.su2", case.name));
             let r = out.join(format!("{}-ranks{n}.json", case.name));
-            let mut args = vec!["deform".to_string(), grid.clone(), "-o".into()];
-            args.push(o.display().to_string());
-            args.extend(["--report".into(), r.display().to_string()]);
-            args.extend(case.flags.iter().cloned());
+            let args = deform_args(&grid, &o, &r, &case.flags);
             let a: Vec<&str> = args.iter().map(String::as_str).collect();
             let res = mpirun(n, bin, &a)?;
             if !res.status.success() {

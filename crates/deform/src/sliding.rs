@@ -2,7 +2,7 @@
 //! tangent constraints of the solve, and the outer iteration that places every sliding node
 //! on its support and re-linearises the constraints there.
 
-use sparse::vec3::norm;
+use sparse::vec3::{axpy, norm};
 use sparse::{Constraints, V3};
 
 use crate::assembly::System;
@@ -48,6 +48,7 @@ pub(crate) struct Sliding<'a> {
 }
 
 /// What the outer iteration did.
+#[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct SlideOutcome {
     /// Outer iterations.
     pub iterations: usize,
@@ -101,13 +102,7 @@ impl Sliding<'_> {
                 dx[u as usize] = [r[0] - cur[i][0], r[1] - cur[i][1], r[2] - cur[i][2]];
             }
             // Largest node update of this iteration.
-            let mut upd = 0.0f64;
-            for (d, b0) in dx.iter().zip(base.iter_mut()) {
-                let e = ((d[0] - b0[0]).powi(2) + (d[1] - b0[1]).powi(2) + (d[2] - b0[2]).powi(2))
-                    .sqrt();
-                upd = upd.max(e);
-                *b0 = *d;
-            }
+            let upd = largest_update(dx, &mut base);
             update = upd / max_disp;
             out.iterations = outer;
             if upd <= opts.slide_rel_tol * max_disp {
@@ -121,32 +116,54 @@ impl Sliding<'_> {
             let mut rp = r.clone();
             cons.project(&mut rp);
             let rn = norm(&rp);
-            let tol = if rn > 0.0 {
-                (opts.rel_tol * bnorm / rn).min(0.5)
-            } else {
-                0.5
-            };
+            let tol = correction_tol(opts, bnorm, rn);
             let mut delta = vec![[0.0; 3]; nu];
             let rep = self.op.solve_to(&r, &mut delta, &cons, opts, max_disp, tol);
             check_converged(&rep, "spring system (Eq. 21), sliding correction", opts)?;
             out.solver_iterations += rep.iterations;
-            for (d, e) in dx.iter_mut().zip(&delta) {
-                for q in 0..3 {
-                    d[q] += e[q];
-                }
-            }
+            axpy(1.0, &delta, dx);
         }
-        out.update = update;
-        if !converged {
-            return Err(Error::NoConvergence {
-                what: format!(
-                    "sliding on supports (Eqs. 27–33): largest node update {update:.3e} × the boundary displacement after"
-                ),
-                solver: "outer iteration".into(),
-                iterations: out.iterations,
-                residual: update,
-            });
+        out.finish(update, converged)
+    }
+}
+
+/// The largest distance between `dx` and `prev` over the nodes (one outer iteration's
+/// update), and `prev` set to `dx`.
+pub(crate) fn largest_update(dx: &[V3], prev: &mut [V3]) -> f64 {
+    let mut upd = 0.0f64;
+    for (d, p) in dx.iter().zip(prev.iter_mut()) {
+        let e = ((d[0] - p[0]).powi(2) + (d[1] - p[1]).powi(2) + (d[2] - p[2]).powi(2)).sqrt();
+        upd = upd.max(e);
+        *p = *d;
+    }
+    upd
+}
+
+/// The relative residual of a sliding correction's solve: the deformation's tolerance of
+/// the right-hand side `bnorm` against the projected residual `rn`, at most 0.5.
+pub(crate) fn correction_tol(opts: &DeformOptions, bnorm: f64, rn: f64) -> f64 {
+    if rn > 0.0 {
+        (opts.rel_tol * bnorm / rn).min(0.5)
+    } else {
+        0.5
+    }
+}
+
+impl SlideOutcome {
+    /// The outcome with its last update `update` (× the boundary displacement), or the
+    /// failure of an outer iteration that did not get below its tolerance.
+    pub(crate) fn finish(mut self, update: f64, converged: bool) -> Result<Self> {
+        self.update = update;
+        if converged {
+            return Ok(self);
         }
-        Ok(out)
+        Err(Error::NoConvergence {
+            what: format!(
+                "sliding on supports (Eqs. 27–33): largest node update {update:.3e} × the boundary displacement after"
+            ),
+            solver: "outer iteration".into(),
+            iterations: self.iterations,
+            residual: update,
+        })
     }
 }

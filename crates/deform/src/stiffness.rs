@@ -203,46 +203,8 @@ pub(crate) fn springs<'a>(
         vol_factor = distance.unwrap_or_else(|| edge_distance(adj, x, moving));
     }
     if kind == Stiffness::Volume {
-        let n = x.len();
-        let mut sum = vec![0.0; n];
-        let mut cnt = vec![0u32; n];
-        let mut total = 0.0;
-        let mut ncell = 0usize;
-        for t in mesh.tets() {
-            let v = mesh::quality::tet_volume([
-                x[t[0] as usize],
-                x[t[1] as usize],
-                x[t[2] as usize],
-                x[t[3] as usize],
-            ])
-            .abs();
-            total += v;
-            ncell += 1;
-            for &i in t {
-                sum[i as usize] += v;
-                cnt[i as usize] += 1;
-            }
-        }
-        for t in mesh.triangles() {
-            let p = |i: u32| Vector3::from(x[i as usize]);
-            let v = 0.5 * (p(t[1]) - p(t[0])).cross(&(p(t[2]) - p(t[0]))).norm();
-            total += v;
-            ncell += 1;
-            for &i in t {
-                sum[i as usize] += v;
-                cnt[i as usize] += 1;
-            }
-        }
-        let mean = if ncell > 0 { total / ncell as f64 } else { 1.0 };
-        vol_factor = (0..n)
-            .map(|i| {
-                if cnt[i] > 0 && sum[i] > 0.0 {
-                    mean / (sum[i] / cnt[i] as f64)
-                } else {
-                    1.0
-                }
-            })
-            .collect();
+        let v = NodeVolumes::new(mesh, x, |_| true);
+        vol_factor = v.factors(v.mean(v.total, v.cells));
     }
     // A power of two near 1 / diag^p (exact scaling; K is ~1 / length^p): the baseline
     // grid's size serves every state (any power of two would give the same solution).
@@ -253,6 +215,77 @@ pub(crate) fn springs<'a>(
         scale,
         vol_factor,
         wall_len,
+    }
+}
+
+/// The cells' volumes around every node (tetrahedra; triangle areas in a plane grid):
+/// per node their sum and count, and over the cells a filter accepts their sum and count
+/// (for [`Stiffness::Volume`]'s V̄ / V_i).
+pub(crate) struct NodeVolumes {
+    /// Σ of the volumes of the cells around each node.
+    pub sum: Vec<f64>,
+    /// Number of cells around each node.
+    pub count: Vec<u32>,
+    /// Σ of the volumes of the accepted cells.
+    pub total: f64,
+    /// Number of accepted cells.
+    pub cells: f64,
+}
+
+impl NodeVolumes {
+    /// The volumes of `mesh`'s cells at `x`; `accept` picks the cells of the totals (a
+    /// rank's share of a distributed grid; all of them serially).
+    pub fn new(mesh: &Mesh, x: &[[f64; 3]], accept: impl Fn(&[u32]) -> bool) -> Self {
+        let n = x.len();
+        let mut out = Self {
+            sum: vec![0.0; n],
+            count: vec![0; n],
+            total: 0.0,
+            cells: 0.0,
+        };
+        let mut add = |e: &[u32], v: f64| {
+            if accept(e) {
+                out.total += v;
+                out.cells += 1.0;
+            }
+            for &i in e {
+                out.sum[i as usize] += v;
+                out.count[i as usize] += 1;
+            }
+        };
+        for t in mesh.tets() {
+            let v = mesh::quality::tet_volume(t.map(|i| x[i as usize])).abs();
+            add(t, v);
+        }
+        for t in mesh.triangles() {
+            let p = |i: u32| Vector3::from(x[i as usize]);
+            add(
+                t,
+                0.5 * (p(t[1]) - p(t[0])).cross(&(p(t[2]) - p(t[0]))).norm(),
+            );
+        }
+        out
+    }
+
+    /// The mean cell volume of `total` over `cells` (1 without cells).
+    pub fn mean(&self, total: f64, cells: f64) -> f64 {
+        if cells > 0.0 { total / cells } else { 1.0 }
+    }
+
+    /// V̄ / V_i per node for the mean volume `mean` (1 where no cell or a zero volume is
+    /// around the node).
+    pub fn factors(&self, mean: f64) -> Vec<f64> {
+        self.sum
+            .iter()
+            .zip(&self.count)
+            .map(|(&s, &c)| {
+                if c > 0 && s > 0.0 {
+                    mean / (s / f64::from(c))
+                } else {
+                    1.0
+                }
+            })
+            .collect()
     }
 }
 

@@ -9,13 +9,23 @@ use mesh::Adjacency;
 /// neighbour at the same distance cannot lower it), so the monotone [`RadixHeap`] gives the
 /// distances of a binary heap bit for bit.
 pub(crate) fn edge_distance(adj: &Adjacency, x: &[[f64; 3]], source: &[bool]) -> Vec<f64> {
-    let n = x.len();
-    let mut d = vec![f64::INFINITY; n];
+    let mut d: Vec<f64> = source
+        .iter()
+        .map(|&s| if s { 0.0 } else { f64::INFINITY })
+        .collect();
+    settle(adj, x, &mut d);
+    d
+}
+
+/// Lowers the distances `d` along grid edges from every node of finite distance in it
+/// (Dijkstra seeded with those distances; [`edge_distance`] seeds the sources with 0, the
+/// distributed distance a rank's part with what the other ranks found).
+pub(crate) fn settle(adj: &Adjacency, x: &[[f64; 3]], d: &mut [f64]) {
     let mut heap = RadixHeap::default();
-    for i in 0..n {
-        if source[i] {
-            d[i] = 0.0;
-            heap.push(0, i as u32);
+    for (i, v) in d.iter().enumerate() {
+        if v.is_finite() {
+            // Non-negative f64 bit patterns order like the values.
+            heap.push(v.to_bits(), i as u32);
         }
     }
     while let Some((key, i)) = heap.pop() {
@@ -37,7 +47,6 @@ pub(crate) fn edge_distance(adj: &Adjacency, x: &[[f64; 3]], source: &[bool]) ->
             }
         }
     }
-    d
 }
 
 /// Monotone priority queue on u64 keys (radix heap): every pushed key must be ≥ the last

@@ -32,7 +32,7 @@ use sparse::envelope::EnvelopeCholesky;
 use sparse::order::reverse_cuthill_mckee;
 use sparse::{SymMatrix, V3};
 
-use super::comm::{Comm, max};
+use super::comm::{Comm, max, offsets};
 use super::halo::Halo;
 use super::rcb::rcb;
 use super::solve::DistOperator;
@@ -371,14 +371,7 @@ fn gather_all(comm: &Comm, i: &[u32], j: &[u32], v: &[f64]) -> (Vec<u32>, Vec<u3
     let p = comm.size() as usize;
     let mut counts = vec![0i32; p];
     comm.all_gather_into(&(i.len() as i32), &mut counts[..]);
-    let displs: Vec<i32> = counts
-        .iter()
-        .scan(0, |a, &x| {
-            let d = *a;
-            *a += x;
-            Some(d)
-        })
-        .collect();
+    let displs = offsets(&counts);
     let total: usize = counts.iter().map(|&c| c as usize).sum();
     let (mut ai, mut aj, mut av) = (vec![0u32; total], vec![0u32; total], vec![0.0f64; total]);
     comm.all_gather_varcount_into(

@@ -90,6 +90,19 @@ pub(crate) fn agree<T>(comm: &Comm, local: Result<T>) -> Result<T> {
     }
 }
 
+/// The offsets of blocks of `counts` laid end to end (the displacements of a
+/// variable-count gather or exchange).
+pub(crate) fn offsets(counts: &[i32]) -> Vec<i32> {
+    counts
+        .iter()
+        .scan(0, |a, &x| {
+            let d = *a;
+            *a += x;
+            Some(d)
+        })
+        .collect()
+}
+
 /// Sends `out[r]` to rank r and returns what each rank sent here (`in[r]` from rank r).
 pub(crate) fn all_to_all<T: Equivalence + Copy + Default>(
     comm: &Comm,
@@ -99,16 +112,7 @@ pub(crate) fn all_to_all<T: Equivalence + Copy + Default>(
     let counts: Vec<i32> = out.iter().map(|v| v.len() as i32).collect();
     let mut rcounts = vec![0i32; p];
     comm.all_to_all_into(&counts[..], &mut rcounts[..]);
-    let displs = |c: &[i32]| -> Vec<i32> {
-        c.iter()
-            .scan(0, |a, &x| {
-                let d = *a;
-                *a += x;
-                Some(d)
-            })
-            .collect()
-    };
-    let (sd, rd) = (displs(&counts), displs(&rcounts));
+    let (sd, rd) = (offsets(&counts), offsets(&rcounts));
     let flat: Vec<T> = out.iter().flatten().copied().collect();
     let total: usize = rcounts.iter().map(|&c| c as usize).sum();
     let mut buf = vec![T::default(); total];

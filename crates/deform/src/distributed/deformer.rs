@@ -14,7 +14,7 @@ use serde::Serialize;
 use sparse::{Constraints, V3};
 
 use super::coarse::{CoarseOp, CoarseSpace};
-use super::comm::{Comm, agree, max, min, sum_u64};
+use super::comm::{Comm, agree, max, min, offsets, sum_u64};
 use super::halo::Halo;
 use super::metis::Partitioner;
 use super::partition::{LocalGrid, Partition, locality_order};
@@ -27,6 +27,7 @@ use crate::bc::{BoundaryConditions, NodeRole};
 use crate::error::{Error, Result};
 use crate::operator::check_converged;
 use crate::options::{DeformOptions, SolverKind};
+use crate::sliding::SlideOutcome;
 use crate::stiffness::{Stiffness, length_scale, springs};
 use crate::support::{Support, Supports};
 
@@ -477,7 +478,7 @@ impl<'c> Deformer<'c> {
         params: &mut [[f64; 2]],
         coarse: Option<&CoarseSpace>,
         sec: &mut DistSeconds,
-    ) -> Result<(usize, usize, f64, slide::SlideOutcome)> {
+    ) -> Result<(usize, usize, f64, SlideOutcome)> {
         let (comm, opts, part, sys) = (self.comm, &self.opts, &self.local.part, &self.sys);
         let cls = &self.local.cls;
         let x0 = &part.grid.mesh.coords;
@@ -506,7 +507,7 @@ impl<'c> Deformer<'c> {
         }
         let max_disp = max(comm, max_disp);
         if max_disp == 0.0 {
-            return Ok((0, 0, 0.0, slide::SlideOutcome::default()));
+            return Ok((0, 0, 0.0, SlideOutcome::default()));
         }
         let t = Instant::now();
         let mut sp = match opts.stiffness {
@@ -594,7 +595,7 @@ impl<'c> Deformer<'c> {
             opts.rel_tol,
         );
         check_converged(&r, "spring system (Eq. 21)", opts)?;
-        let mut so = slide::SlideOutcome::default();
+        let mut so = SlideOutcome::default();
         if let Some(sl) = &self.slide {
             let n_all = self.unk_node.len();
             so = sl.iterate(
@@ -688,14 +689,7 @@ impl<'c> Deformer<'c> {
         }
         let displs = |w: i32| -> (Vec<i32>, Vec<i32>) {
             let c: Vec<i32> = counts.iter().map(|&c| c * w).collect();
-            let d = c
-                .iter()
-                .scan(0, |a, &x| {
-                    let d = *a;
-                    *a += x;
-                    Some(d)
-                })
-                .collect();
+            let d = offsets(&c);
             (c, d)
         };
         let total: usize = counts.iter().map(|&c| c as usize).sum();

@@ -11,17 +11,18 @@ use std::collections::HashMap;
 use geom_db::GeomDb;
 use mpi::datatype::PartitionMut;
 use mpi::traits::*;
-use sparse::vec3::dot;
+use sparse::vec3::{axpy, dot};
 use sparse::{Constraints, V3};
 
-use super::comm::{Comm, agree, max, min, sum, sum_u64};
+use super::comm::{Comm, agree, max, min, offsets, sum, sum_u64};
 use super::halo::Halo;
 use super::partition::Partition;
 use super::solve::DistOperator;
 use crate::assembly::System;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::operator::check_converged;
 use crate::options::DeformOptions;
+use crate::sliding::{SlideOutcome, correction_tol, largest_update};
 use crate::support::{SupKind, SupNode, Support, check_kind, place, point, tangent_constraint};
 
 /// A sliding node as five floats: global id, kind (0 curve, 1 surface), entity id,
@@ -58,17 +59,6 @@ pub(crate) struct Slide {
     diag: f64,
     /// Sliding nodes over the ranks.
     pub total: u64,
-}
-
-/// What the outer iteration of one increment did.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct SlideOutcome {
-    /// Outer iterations.
-    pub iterations: usize,
-    /// The last largest node update relative to the boundary displacement.
-    pub update: f64,
-    /// Iterations of the correction solves.
-    pub solver_iterations: usize,
 }
 
 impl Slide {
@@ -225,14 +215,7 @@ impl Slide {
                 Ok(())
             })();
             agree(comm, placed)?;
-            let mut upd = 0.0f64;
-            for (d, p) in dx.iter().zip(prev.iter_mut()) {
-                let e =
-                    ((d[0] - p[0]).powi(2) + (d[1] - p[1]).powi(2) + (d[2] - p[2]).powi(2)).sqrt();
-                upd = upd.max(e);
-                *p = *d;
-            }
-            let upd = max(comm, upd);
+            let upd = max(comm, largest_update(dx, &mut prev));
             update = upd / max_disp;
             out.iterations = outer;
             if upd <= opts.slide_rel_tol * max_disp {
@@ -253,33 +236,14 @@ impl Slide {
             let mut rp = r.clone();
             cons.project(&mut rp);
             let rn = sum(comm, dot(&rp, &rp)).sqrt();
-            let rel = if rn > 0.0 {
-                (opts.rel_tol * bnorm / rn).min(0.5)
-            } else {
-                0.5
-            };
+            let rel = correction_tol(opts, bnorm, rn);
             let mut delta = vec![[0.0; 3]; n];
             let rep = op.solve(comm, halo, n_all, &r, &mut delta, &cons, opts, rel);
             check_converged(&rep, "spring system (Eq. 21), sliding correction", opts)?;
             out.solver_iterations += rep.iterations;
-            for (d, e) in dx.iter_mut().zip(&delta) {
-                for q in 0..3 {
-                    d[q] += e[q];
-                }
-            }
+            axpy(1.0, &delta, dx);
         }
-        out.update = update;
-        if !converged {
-            return Err(Error::NoConvergence {
-                what: format!(
-                    "sliding on supports (Eqs. 27–33): largest node update {update:.3e} × the boundary displacement after"
-                ),
-                solver: "outer iteration".into(),
-                iterations: out.iterations,
-                residual: update,
-            });
-        }
-        Ok(out)
+        out.finish(update, converged)
     }
 
     /// Puts the owned sliding nodes of `cur` exactly on their supports at `params`; returns
@@ -335,14 +299,7 @@ pub(crate) fn gather(comm: &Comm, mine: &[(u64, Support)]) -> Option<Vec<(u64, S
     }
     let mut counts = vec![0i32; comm.size() as usize];
     root.gather_into_root(&n, &mut counts[..]);
-    let displs: Vec<i32> = counts
-        .iter()
-        .scan(0, |a, &x| {
-            let d = *a;
-            *a += x;
-            Some(d)
-        })
-        .collect();
+    let displs = offsets(&counts);
     let total: usize = counts.iter().map(|&c| c as usize).sum();
     let mut all = vec![0.0f64; total];
     root.gather_varcount_into_root(

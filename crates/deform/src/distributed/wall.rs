@@ -12,15 +12,11 @@
 //!   sums in the same order, whatever the order in which nodes are settled. ℓ is 0.2 × the
 //!   diagonal of the moving nodes' bounding box over the ranks.
 
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
-
-use nalgebra::Vector3;
-
 use super::comm::{Comm, max, min, sum_n, sum_u64};
 use super::partition::Partition;
 use crate::bc::NodeRole;
-use crate::stiffness::{Springs, Stiffness, WALL_SCALE};
+use crate::stiffness::{NodeVolumes, Springs, Stiffness, WALL_SCALE};
+use crate::wall_distance::settle;
 
 /// True when this rank counts the cell `e`: it owns the cell's node of smallest global id.
 fn counted(part: &Partition, e: &[u32]) -> bool {
@@ -75,50 +71,12 @@ pub(crate) fn springs<'a>(
 
 /// V̄ / V_i of every local node (1 where no cell or a zero volume is around it).
 fn volume_factors(comm: &Comm, part: &Partition, x: &[[f64; 3]]) -> Vec<f64> {
-    let mesh = &part.grid.mesh;
-    let n = x.len();
-    let mut sum = vec![0.0; n];
-    let mut cnt = vec![0u32; n];
-    let (mut total, mut ncell) = (0.0, 0.0);
-    for t in mesh.tets() {
-        let v = mesh::quality::tet_volume([
-            x[t[0] as usize],
-            x[t[1] as usize],
-            x[t[2] as usize],
-            x[t[3] as usize],
-        ])
-        .abs();
-        if counted(part, t) {
-            total += v;
-            ncell += 1.0;
-        }
-        for &i in t {
-            sum[i as usize] += v;
-            cnt[i as usize] += 1;
-        }
-    }
-    for t in mesh.triangles() {
-        let p = |i: u32| Vector3::from(x[i as usize]);
-        let v = 0.5 * (p(t[1]) - p(t[0])).cross(&(p(t[2]) - p(t[0]))).norm();
-        if counted(part, t) {
-            total += v;
-            ncell += 1.0;
-        }
-        for &i in t {
-            sum[i as usize] += v;
-            cnt[i as usize] += 1;
-        }
-    }
-    let [total, ncell] = sum_n(comm, [total, ncell]);
-    let mean = if ncell > 0.0 { total / ncell } else { 1.0 };
-    let mut f: Vec<[f64; 1]> = (0..n)
-        .map(|i| {
-            [if cnt[i] > 0 && sum[i] > 0.0 {
-                mean / (sum[i] / f64::from(cnt[i]))
-            } else {
-                1.0
-            }]
-        })
+    let v = NodeVolumes::new(&part.grid.mesh, x, |e| counted(part, e));
+    let [total, cells] = sum_n(comm, [v.total, v.cells]);
+    let mut f: Vec<[f64; 1]> = v
+        .factors(v.mean(total, cells))
+        .into_iter()
+        .map(|f| [f])
         .collect();
     // A ghost's cells are not all on this rank: its owner's factor.
     part.halo.exchange(comm, &mut f);
@@ -139,7 +97,11 @@ pub(crate) fn edge_distance(
         .collect();
     loop {
         let before: Vec<u64> = d.iter().map(|v| v[0].to_bits()).collect();
-        relax(&part.adj, x, &mut d);
+        let mut flat: Vec<f64> = d.iter().map(|v| v[0]).collect();
+        settle(&part.adj, x, &mut flat);
+        for (v, f) in d.iter_mut().zip(flat) {
+            v[0] = f;
+        }
         part.halo.exchange(comm, &mut d);
         let changed = d.iter().zip(&before).any(|(v, &b)| v[0].to_bits() != b);
         if sum_u64(comm, u64::from(changed)) == 0 {
@@ -147,36 +109,6 @@ pub(crate) fn edge_distance(
         }
     }
     d.into_iter().map(|v| v[0]).collect()
-}
-
-/// Dijkstra on the local graph from every node of finite distance in `d` (lowered in
-/// place).
-fn relax(adj: &mesh::Adjacency, x: &[[f64; 3]], d: &mut [[f64; 1]]) {
-    // Non-negative f64 bit patterns order like the values.
-    let mut heap: BinaryHeap<Reverse<(u64, u32)>> = d
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| v[0].is_finite())
-        .map(|(i, v)| Reverse((v[0].to_bits(), i as u32)))
-        .collect();
-    while let Some(Reverse((key, i))) = heap.pop() {
-        let i = i as usize;
-        let di = f64::from_bits(key);
-        if di > d[i][0] {
-            continue;
-        }
-        let a = x[i];
-        for &j in adj.neighbours(i) {
-            let j = j as usize;
-            let b = x[j];
-            let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt();
-            let dj = di + l;
-            if dj < d[j][0] {
-                d[j][0] = dj;
-                heap.push(Reverse((dj.to_bits(), j as u32)));
-            }
-        }
-    }
 }
 
 /// The weight φ of R per local node for the reach `reach` ([`crate::options::reach_weight`]
