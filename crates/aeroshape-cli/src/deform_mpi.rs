@@ -79,15 +79,20 @@ pub fn run(args: &DeformArgs, request: Request) -> anyhow::Result<()> {
     let t_all = Instant::now();
     let universe = mpi::initialize().context("MPI could not be initialised")?;
     let world = universe.world();
-    if let Err(e) = deform_on(&world, args, request, t_all) {
-        // One write of the whole line: the ranks' lines share mpirun's stderr, and
-        // `eprintln!` writes the pieces of its format separately (they interleaved).
-        let line = format!("error: {}\n", crate::one_line(&e));
-        let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
-        world.barrier();
-        return Err(Reported.into());
-    }
-    Ok(())
+    deform_on(&world, args, request, t_all).map_err(|e| reported(&world, &e))
+}
+
+/// Prints the failure `e` of this rank in one write, waits for the other ranks (which
+/// print theirs), and gives [`Reported`]: the ranks agree on a failure before any blocking
+/// exchange, so every rank comes here, and none exits (after which mpirun kills the
+/// others) before all have printed.
+pub fn reported(world: &distributed::Comm, e: &anyhow::Error) -> anyhow::Error {
+    // One write of the whole line: the ranks' lines share mpirun's stderr, and
+    // `eprintln!` writes the pieces of its format separately (they interleaved).
+    let line = format!("error: {}\n", crate::one_line(e));
+    let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
+    world.barrier();
+    Reported.into()
 }
 
 /// An error every rank has already printed: the program exits 1 without printing it again.

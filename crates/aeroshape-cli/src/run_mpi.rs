@@ -39,6 +39,11 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let universe = mpi::initialize().context("MPI could not be initialised")?;
     let world = universe.world();
+    run_on(&world, a, t0).map_err(|e| crate::deform_mpi::reported(&world, &e))
+}
+
+/// [`run`] on the world communicator `world`.
+fn run_on(world: &deform::distributed::Comm, a: RunArgs, t0: Instant) -> anyhow::Result<()> {
     let root = world.rank() == 0;
     let case = super::run::load_case(&a)?;
     let made = if root {
@@ -47,7 +52,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     } else {
         Ok(())
     };
-    agree(&world, made, &a.output)?;
+    agree(world, made, &a.output)?;
     if root {
         eprintln!(
             "[run] building the study from {} on {} ranks",
@@ -55,7 +60,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
             world.size()
         );
     }
-    let study = DistributedStudy::new(&world, case, &a.case)?;
+    let study = DistributedStudy::new(world, case, &a.case)?;
     let x = match &a.dv {
         Some(p) => load_design_values(p)
             .map_err(anyhow::Error::from)
@@ -67,7 +72,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         None => Ok(study.initial()),
     };
     // The same files on every rank: the same outcome.
-    let x = agree(&world, x, &a.case)?;
+    let x = agree(world, x, &a.case)?;
     let feasible = super::param::check_constraints(
         &study.case().parametrisation,
         &x,
@@ -75,7 +80,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         a.allow_infeasible,
         "run",
     );
-    agree(&world, feasible, &a.case)?;
+    agree(world, feasible, &a.case)?;
     let ev = study.evaluate(&x, &mut |p| {
         if root {
             eprintln!("[run] {p}");
@@ -87,7 +92,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         }
         _ => Ok(()),
     };
-    agree(&world, written, &a.output)
+    agree(world, written, &a.output)
 }
 
 /// `local` on every rank when it is `Ok` everywhere; otherwise the error of the lowest
