@@ -204,7 +204,7 @@ pub(crate) fn springs<'a>(
     }
     if kind == Stiffness::Volume {
         let v = NodeVolumes::new(mesh, x, |_| true);
-        vol_factor = v.factors(v.mean(v.total, v.cells));
+        vol_factor = v.factors(mean_volume(v.total, v.cells));
     }
     // A power of two near 1 / diag^p (exact scaling; K is ~1 / length^p): the baseline
     // grid's size serves every state (any power of two would give the same solution).
@@ -267,11 +267,6 @@ impl NodeVolumes {
         out
     }
 
-    /// The mean cell volume of `total` over `cells` (1 without cells).
-    pub fn mean(&self, total: f64, cells: f64) -> f64 {
-        if cells > 0.0 { total / cells } else { 1.0 }
-    }
-
     /// V̄ / V_i per node for the mean volume `mean` (1 where no cell or a zero volume is
     /// around the node).
     pub fn factors(&self, mean: f64) -> Vec<f64> {
@@ -287,6 +282,11 @@ impl NodeVolumes {
             })
             .collect()
     }
+}
+
+/// The mean cell volume of `total` over `cells` cells (1 without cells).
+pub(crate) fn mean_volume(total: f64, cells: f64) -> f64 {
+    if cells > 0.0 { total / cells } else { 1.0 }
 }
 
 #[cfg(test)]

@@ -15,7 +15,7 @@
 use super::comm::{Comm, max, min, sum_n, sum_u64};
 use super::partition::Partition;
 use crate::bc::NodeRole;
-use crate::stiffness::{NodeVolumes, Springs, Stiffness, WALL_SCALE};
+use crate::stiffness::{NodeVolumes, Springs, Stiffness, WALL_SCALE, mean_volume};
 use crate::wall_distance::settle;
 
 /// True when this rank counts the cell `e`: it owns the cell's node of smallest global id.
@@ -74,7 +74,7 @@ fn volume_factors(comm: &Comm, part: &Partition, x: &[[f64; 3]]) -> Vec<f64> {
     let v = NodeVolumes::new(&part.grid.mesh, x, |e| counted(part, e));
     let [total, cells] = sum_n(comm, [v.total, v.cells]);
     let mut f: Vec<[f64; 1]> = v
-        .factors(v.mean(total, cells))
+        .factors(mean_volume(total, cells))
         .into_iter()
         .map(|f| [f])
         .collect();
