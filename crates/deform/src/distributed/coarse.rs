@@ -53,7 +53,12 @@ impl CoarseSpace {
     /// Cuts this rank's free owned unknowns (`coords`, `constrained` per owned unknown) into
     /// at least `parts` aggregates ([`per_rank`]: more in parts of over [`COARSE_SIZE`]
     /// unknowns, fewer when there are fewer unknowns) and brings the ghost unknowns'
-    /// aggregates from their owners (`halo` over `n_all` local unknowns). Collective.
+    /// aggregates from their owners (`halo` over `n_all` local unknowns); and, when some
+    /// rank has constrained unknowns, a second space that aggregates every unknown, constrained or not, for the solves where
+    /// none is constrained (the R field, Eq. 26): the first one leaves the sliding
+    /// unknowns without a coarse correction, and at 1M nodes on 2 ranks the ~28 000 nodes
+    /// of the symmetry plane took Eq. 26 to 28 iterations against 17 serially
+    /// (docs/perf-log/2026-12-03-mpi-round4.md). Collective.
     pub fn new(
         comm: &Comm,
         halo: &Halo,
@@ -61,17 +66,41 @@ impl CoarseSpace {
         constrained: &[bool],
         n_all: usize,
         parts: usize,
-    ) -> Self {
+    ) -> (Self, Option<Self>) {
         let free: Vec<usize> = (0..coords.len()).filter(|&k| !constrained[k]).collect();
         let k = per_rank(parts, free.len(), comm.size() as usize);
-        let xs: Vec<[f64; 3]> = free.iter().map(|&i| coords[i]).collect();
+        let space = Self::cut(comm, halo, coords, &free, k, n_all);
+        let some = u64::from(free.len() < coords.len());
+        let mut any = 0u64;
+        comm.all_reduce_into(&some, &mut any, SystemOperation::max());
+        if any == 0 {
+            return (space, None);
+        }
+        let all: Vec<usize> = (0..coords.len()).collect();
+        let k_all = per_rank(parts, all.len(), comm.size() as usize);
+        let space_all = Self::cut(comm, halo, coords, &all, k_all, n_all);
+        (space, Some(space_all))
+    }
+
+    /// `k` aggregates of the owned unknowns `idx` (the others left out) by coordinate
+    /// bisection, numbered over the ranks in rank order, and the ghost unknowns'
+    /// aggregates from their owners. Collective.
+    fn cut(
+        comm: &Comm,
+        halo: &Halo,
+        coords: &[[f64; 3]],
+        idx: &[usize],
+        k: usize,
+        n_all: usize,
+    ) -> Self {
+        let xs: Vec<[f64; 3]> = idx.iter().map(|&i| coords[i]).collect();
         let part = rcb(&xs, k);
         let mut counts = vec![0u64; comm.size() as usize];
         comm.all_gather_into(&(k as u64), &mut counts[..]);
         let first: u64 = counts[..comm.rank() as usize].iter().sum();
         let n = counts.iter().sum::<u64>() as usize;
         let mut v = vec![[f64::from(NONE)]; n_all];
-        for (&i, &p) in free.iter().zip(&part) {
+        for (&i, &p) in idx.iter().zip(&part) {
             v[i] = [(first + u64::from(p)) as f64];
         }
         halo.exchange(comm, &mut v);
@@ -173,22 +202,22 @@ impl CoarseOp {
             empty[2 * e] = f64::from(NONE);
         }
         let mut rows = vec![empty; agg.len()];
-        let mut buf: Vec<(u32, f64)> = Vec::new();
+        let mut acc = RowAcc::new(space.n);
         for k in 0..n_own {
             let row = &mut rows[k];
             if agg[k] == NONE {
                 continue;
             }
-            buf.clear();
-            buf.push((agg[k], 1.0 - omega));
+            acc.clear();
+            acc.add(agg[k], 1.0 - omega);
             let s = omega / diag[k];
             a.row_entries(k, |c, v| {
                 let g = agg[c];
                 if g != NONE {
-                    buf.push((g, -s * v));
+                    acc.add(g, -s * v);
                 }
             });
-            merge_row(&mut buf);
+            let buf = acc.take();
             if buf.len() > P_WIDTH {
                 // The largest entries (ties by aggregate), then back in aggregate order.
                 buf.sort_by(|x, y| y.1.abs().total_cmp(&x.1.abs()).then(x.0.cmp(&y.0)));
@@ -216,18 +245,17 @@ impl CoarseOp {
         // A P on the owned rows.
         let (mut off, mut col, mut val) = (vec![0], Vec::new(), Vec::new());
         for k in 0..n_own {
-            buf.clear();
+            acc.clear();
             let d = diag[k];
             for e in p_off[k]..p_off[k + 1] {
-                buf.push((p_col[e], d * p_val[e]));
+                acc.add(p_col[e], d * p_val[e]);
             }
             a.row_entries(k, |c, v| {
                 for e in p_off[c]..p_off[c + 1] {
-                    buf.push((p_col[e], v * p_val[e]));
+                    acc.add(p_col[e], v * p_val[e]);
                 }
             });
-            merge_row(&mut buf);
-            for &(g, v) in &buf {
+            for &(g, v) in acc.take().iter() {
                 col.push(g);
                 val.push(v);
             }
@@ -363,6 +391,49 @@ impl CoarseOp {
                 }
             }
         }
+    }
+}
+
+/// A sparse row summed in a dense index over the aggregates: each entry added to the
+/// first one of its aggregate in the order they come (the sums of a stable sort by
+/// aggregate and a merge, without the sort of every product), read out by aggregate.
+struct RowAcc {
+    /// Place in `row` of each aggregate's entry ([`NONE`]: none yet).
+    at: Vec<u32>,
+    row: Vec<(u32, f64)>,
+}
+
+impl RowAcc {
+    fn new(n: usize) -> Self {
+        Self {
+            at: vec![NONE; n],
+            row: Vec::new(),
+        }
+    }
+
+    #[inline]
+    fn add(&mut self, g: u32, v: f64) {
+        let at = &mut self.at[g as usize];
+        if *at == NONE {
+            *at = self.row.len() as u32;
+            self.row.push((g, v));
+        } else {
+            self.row[*at as usize].1 += v;
+        }
+    }
+
+    /// Starts a row.
+    fn clear(&mut self) {
+        self.row.clear();
+    }
+
+    /// The row in aggregate order (until the next [`RowAcc::clear`]).
+    fn take(&mut self) -> &mut Vec<(u32, f64)> {
+        for &(g, _) in &self.row {
+            self.at[g as usize] = NONE;
+        }
+        self.row.sort_unstable_by_key(|e| e.0);
+        &mut self.row
     }
 }
 

@@ -117,16 +117,8 @@ impl DistOperator {
             .map(|k| k as u32)
             .collect();
         let overlap_halo = overlap.is_some() && opts.solver == SolverKind::PcgMultigrid;
-        let ext = match &overlap {
-            Some(o) if opts.solver == SolverKind::PcgMultigrid => {
-                Some(extended(o, sys, adj, sp, &a)).filter(|_| n_own > 0)
-            }
-            _ => None,
-        };
         // The owned–owned block: `a` without its ghost columns.
-        let own = if ghost.cols.is_empty() {
-            a
-        } else {
+        let own = (!ghost.cols.is_empty()).then(|| {
             let mut own = SymMatrix {
                 diag: a.diag.clone(),
                 offsets: Vec::with_capacity(n_own + 1),
@@ -142,6 +134,16 @@ impl DistOperator {
                 own.offsets.push(own.cols.len());
             }
             own
+        });
+        // The extended block takes over `a`'s rows (no copy of them); collective, so made
+        // on a rank without owned unknowns too.
+        let (own, ext) = match &overlap {
+            Some(o) if opts.solver == SolverKind::PcgMultigrid => {
+                let own = own.unwrap_or_else(|| a.clone());
+                let ext = extended(o, sys, adj, sp, a);
+                (own, Some(ext).filter(|_| n_own > 0))
+            }
+            _ => (own.unwrap_or(a), None),
         };
         let block = match opts.solver {
             _ if ext.is_some() => {
@@ -408,7 +410,7 @@ fn extended(
     sys: &System,
     adj: &mesh::Adjacency,
     sp: &Springs,
-    a: &SymMatrix<f32>,
+    a: SymMatrix<f32>,
 ) -> (SymMatrix<f32>, Vec<f64>) {
     let (n_own, n_all) = (a.n(), o.unk_node.len());
     // The blocks that hold each unknown.
@@ -423,10 +425,11 @@ fn extended(
     o.halo.exchange(o.comm, &mut d);
     let mut m = SymMatrix {
         diag: d.iter().map(|v| v[0]).collect(),
-        offsets: a.offsets.clone(),
-        cols: a.cols.clone(),
-        vals: a.vals.clone(),
+        offsets: a.offsets,
+        cols: a.cols,
+        vals: a.vals,
     };
+    m.offsets.reserve(n_all - n_own);
     let mut row: Vec<(u32, f32)> = Vec::new();
     for k in n_own..n_all {
         let i = o.unk_node[k] as usize;
