@@ -53,12 +53,12 @@ impl CoarseSpace {
     /// Cuts this rank's free owned unknowns (`coords`, `constrained` per owned unknown) into
     /// at least `parts` aggregates ([`per_rank`]: more in parts of over [`COARSE_SIZE`]
     /// unknowns, fewer when there are fewer unknowns) and brings the ghost unknowns'
-    /// aggregates from their owners (`halo` over `n_all` local unknowns); and, when some
-    /// rank has constrained unknowns, a second space that aggregates every unknown, constrained or not, for the solves where
-    /// none is constrained (the R field, Eq. 26): the first one leaves the sliding
-    /// unknowns without a coarse correction, and at 1M nodes on 2 ranks the ~28 000 nodes
-    /// of the symmetry plane took Eq. 26 to 28 iterations against 17 serially
-    /// (docs/perf-log/2026-12-03-mpi-round4.md). Collective.
+    /// aggregates from their owners (`halo` over `n_all` local unknowns). Collective.
+    ///
+    /// The R field (Eq. 26) uses the same space, though its sliding unknowns are free: a
+    /// second space aggregating them too, with its own coarse operator, took the R field
+    /// from 28 to 27 iterations at 1M nodes on 2 ranks for 0.3 s of set-up per increment,
+    /// more than the iteration saved (docs/perf-log/2026-12-03-mpi-round4.md).
     pub fn new(
         comm: &Comm,
         halo: &Halo,
@@ -66,41 +66,17 @@ impl CoarseSpace {
         constrained: &[bool],
         n_all: usize,
         parts: usize,
-    ) -> (Self, Option<Self>) {
+    ) -> Self {
         let free: Vec<usize> = (0..coords.len()).filter(|&k| !constrained[k]).collect();
         let k = per_rank(parts, free.len(), comm.size() as usize);
-        let space = Self::cut(comm, halo, coords, &free, k, n_all);
-        let some = u64::from(free.len() < coords.len());
-        let mut any = 0u64;
-        comm.all_reduce_into(&some, &mut any, SystemOperation::max());
-        if any == 0 {
-            return (space, None);
-        }
-        let all: Vec<usize> = (0..coords.len()).collect();
-        let k_all = per_rank(parts, all.len(), comm.size() as usize);
-        let space_all = Self::cut(comm, halo, coords, &all, k_all, n_all);
-        (space, Some(space_all))
-    }
-
-    /// `k` aggregates of the owned unknowns `idx` (the others left out) by coordinate
-    /// bisection, numbered over the ranks in rank order, and the ghost unknowns'
-    /// aggregates from their owners. Collective.
-    fn cut(
-        comm: &Comm,
-        halo: &Halo,
-        coords: &[[f64; 3]],
-        idx: &[usize],
-        k: usize,
-        n_all: usize,
-    ) -> Self {
-        let xs: Vec<[f64; 3]> = idx.iter().map(|&i| coords[i]).collect();
+        let xs: Vec<[f64; 3]> = free.iter().map(|&i| coords[i]).collect();
         let part = rcb(&xs, k);
         let mut counts = vec![0u64; comm.size() as usize];
         comm.all_gather_into(&(k as u64), &mut counts[..]);
         let first: u64 = counts[..comm.rank() as usize].iter().sum();
         let n = counts.iter().sum::<u64>() as usize;
         let mut v = vec![[f64::from(NONE)]; n_all];
-        for (&i, &p) in idx.iter().zip(&part) {
+        for (&i, &p) in free.iter().zip(&part) {
             v[i] = [(first + u64::from(p)) as f64];
         }
         halo.exchange(comm, &mut v);

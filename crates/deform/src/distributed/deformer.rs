@@ -348,9 +348,8 @@ impl<'c> Deformer<'c> {
         self
     }
 
-    /// The coarse space of the set-up's unknowns, when there is one, and that of the R
-    /// field when it differs (with constrained unknowns: [`CoarseSpace::new`]; collective).
-    fn coarse_space(&self) -> Option<(CoarseSpace, Option<CoarseSpace>)> {
+    /// The coarse space of the set-up's unknowns, when there is one (collective).
+    fn coarse_space(&self) -> Option<CoarseSpace> {
         if self.comm.size() < 2 || self.coarse_parts == 0 {
             return None;
         }
@@ -404,7 +403,7 @@ impl<'c> Deformer<'c> {
         };
         let t = Instant::now();
         let coarse = self.coarse_space();
-        rep.coarse_aggregates = coarse.as_ref().map_or(0, |c| c.0.len());
+        rep.coarse_aggregates = coarse.as_ref().map_or(0, CoarseSpace::len);
         rep.seconds.setup = self.setup + max(comm, t.elapsed().as_secs_f64());
         let t = Instant::now();
         let cells = counted_cells(part);
@@ -477,7 +476,7 @@ impl<'c> Deformer<'c> {
         s: f64,
         cur: &mut [[f64; 3]],
         params: &mut [[f64; 2]],
-        coarse: Option<&(CoarseSpace, Option<CoarseSpace>)>,
+        coarse: Option<&CoarseSpace>,
         sec: &mut DistSeconds,
     ) -> Result<(usize, usize, f64, SlideOutcome)> {
         let (comm, opts, part, sys) = (self.comm, &self.opts, &self.local.part, &self.sys);
@@ -525,17 +524,9 @@ impl<'c> Deformer<'c> {
         });
         let op = DistOperator::new(sys, &part.adj, &sp, sys.node_of.len(), opts, overlap);
         let mut op = agree(comm, op)?;
-        // One coarse operator for both solves when the R field's space is Eq. 21's.
-        let (space, space_r) = match coarse {
-            Some((s, r)) => (Some(s), r.as_ref()),
-            None => (None, None),
-        };
-        let coarse_op = |op: &DistOperator, space: &CoarseSpace| {
-            let c = CoarseOp::new(comm, &self.unk_halo, space, op, sys.node_of.len());
-            agree(comm, c)
-        };
-        if let (Some(space), None) = (space, space_r) {
-            op.coarse = Some(coarse_op(&op, space)?);
+        if let Some(space) = coarse {
+            let c = CoarseOp::new(comm, &self.unk_halo, space, &op, sys.node_of.len());
+            op.coarse = Some(agree(comm, c)?);
         }
         sec.assemble += t.elapsed().as_secs_f64();
         let t = Instant::now();
@@ -550,16 +541,9 @@ impl<'c> Deformer<'c> {
             dim: part.grid.mesh.dim,
             opts,
             reach: &self.reach,
-            coarse: space_r,
         };
-        let rf = rotations(&ctx, &mut op, cur, &target)?;
+        let rf = rotations(&ctx, &op, cur, &target)?;
         sec.rotation += t.elapsed().as_secs_f64();
-        if let (Some(space), Some(_)) = (space, space_r) {
-            let t = Instant::now();
-            op.coarse = None;
-            op.coarse = Some(coarse_op(&op, space)?);
-            sec.assemble += t.elapsed().as_secs_f64();
-        }
         let t = Instant::now();
         let op_ref = &op;
         let cur_ref: &[[f64; 3]] = cur;

@@ -12,7 +12,7 @@
 use mesh::{Adjacency, Mesh};
 use sparse::order;
 
-use super::rcb::rcb;
+use super::rcb::{order_by_key, rcb};
 
 /// How rank 0 cuts the whole grid into one part per rank ([`cut`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -124,18 +124,13 @@ pub(crate) fn metis_in(
     let mut cells = mesh::Elements::new();
     for g in mesh.cells.groups() {
         let nn = g.kind.n_nodes();
-        let mut by_node: Vec<(u32, u32)> = g
+        let lo: Vec<u32> = g
             .nodes
             .chunks_exact(nn)
-            .enumerate()
-            .map(|(c, e)| {
-                let lo = e.iter().map(|&v| perm[v as usize]).min();
-                (lo.unwrap_or(0), c as u32)
-            })
+            .map(|e| e.iter().map(|&v| perm[v as usize]).min().unwrap_or(0))
             .collect();
-        by_node.sort_unstable();
         let mut e = Vec::with_capacity(nn);
-        for (_, c) in by_node {
+        for c in order_by_key(&lo, n) {
             let c = c as usize;
             e.clear();
             e.extend(

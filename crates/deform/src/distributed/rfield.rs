@@ -8,8 +8,7 @@
 use nalgebra::{Matrix3, UnitQuaternion};
 use sparse::{Constraints, V3};
 
-use super::coarse::{CoarseOp, CoarseSpace};
-use super::comm::{Comm, agree, max};
+use super::comm::{Comm, max};
 use super::halo::Halo;
 use super::solve::DistOperator;
 use crate::assembly::{System, rhs};
@@ -68,16 +67,12 @@ pub(crate) struct Ctx<'a> {
     pub opts: &'a DeformOptions,
     /// The weight φ of R per local node (the reach of R; empty: 1 everywhere).
     pub reach: &'a [f64],
-    /// The coarse space of Eq. 26, when it is not that of the operator's coarse correction
-    /// (the sliding unknowns are free in Eq. 26): its coarse operator replaces the
-    /// operator's for this solve.
-    pub coarse: Option<&'a CoarseSpace>,
 }
 
 /// R for the motion of the skin from `cur` to `target` (local nodes).
 pub(crate) fn rotations(
     c: &Ctx,
-    op: &mut DistOperator,
+    op: &DistOperator,
     cur: &[[f64; 3]],
     target: &[[f64; 3]],
 ) -> Result<Rotations> {
@@ -155,11 +150,6 @@ pub(crate) fn rotations(
         |j| [q[j][0], q[j][1], q[j][2]],
         |_, _| [0.0; 3],
     );
-    if let Some(space) = c.coarse {
-        op.coarse = None;
-        let co = CoarseOp::new(c.comm, c.unk_halo, space, op, c.sys.node_of.len());
-        op.coarse = Some(agree(c.comm, co)?);
-    }
     let mut xv = vec![[0.0; 3]; bv.len()];
     let rep = op.solve(
         c.comm,
