@@ -80,8 +80,12 @@ pub struct DistReport {
 /// Seconds per phase (largest over the ranks).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct DistSeconds {
-    /// Unknowns and halo of the unknowns.
+    /// Unknowns and halo of the unknowns, with the partition before them (its part of it
+    /// in [`DistSeconds::partition`]).
     pub setup: f64,
+    /// Of the set-up: the partition in place on every rank (made on rank 0 and scattered,
+    /// or given; its checks, adjacency and halo), before the deformation's own set-up.
+    pub partition: f64,
     /// Springs, assembly, block preconditioner.
     pub assemble: f64,
     /// The R field.
@@ -124,6 +128,8 @@ pub struct Deformer<'c> {
     unk_node: Vec<u32>,
     unk_halo: Halo,
     setup: f64,
+    /// Seconds of the set-up until the partition was in place (largest over the ranks).
+    partition: f64,
     /// The springs' scale of the whole grid (a rank's own grid would give its rows another
     /// power of two than its neighbours' and the matrix over the ranks would not be
     /// symmetric).
@@ -246,6 +252,7 @@ impl<'c> Deformer<'c> {
     }
 
     fn set_up(comm: &'c Comm, local: Local, opts: &DeformOptions, t: Instant) -> Result<Self> {
+        let partition = max(comm, t.elapsed().as_secs_f64());
         let part = &local.part;
         let (n, n_owned) = (part.grid.mesh.n_nodes(), part.grid.n_owned);
         let is_unk = |i: usize| {
@@ -323,6 +330,7 @@ impl<'c> Deformer<'c> {
             unk_node,
             unk_halo,
             setup,
+            partition,
             scale: length_scale(diag, opts.stiffness),
             coarse_parts: COARSE_PARTS,
             overlap: true,
@@ -405,6 +413,7 @@ impl<'c> Deformer<'c> {
         let coarse = self.coarse_space();
         rep.coarse_aggregates = coarse.as_ref().map_or(0, CoarseSpace::len);
         rep.seconds.setup = self.setup + max(comm, t.elapsed().as_secs_f64());
+        rep.seconds.partition = self.partition;
         let t = Instant::now();
         let cells = counted_cells(part);
         let (min0, bad0) = self.quality(&cells, x0);
