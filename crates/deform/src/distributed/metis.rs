@@ -12,7 +12,7 @@
 use mesh::{Adjacency, Mesh};
 use sparse::order;
 
-use super::rcb::{order_by_key, rcb};
+use super::rcb::rcb;
 
 /// How rank 0 cuts the whole grid into one part per rank ([`cut`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -124,13 +124,18 @@ pub(crate) fn metis_in(
     let mut cells = mesh::Elements::new();
     for g in mesh.cells.groups() {
         let nn = g.kind.n_nodes();
-        let lo: Vec<u32> = g
+        let mut by_node: Vec<(u32, u32)> = g
             .nodes
             .chunks_exact(nn)
-            .map(|e| e.iter().map(|&v| perm[v as usize]).min().unwrap_or(0))
+            .enumerate()
+            .map(|(c, e)| {
+                let lo = e.iter().map(|&v| perm[v as usize]).min();
+                (lo.unwrap_or(0), c as u32)
+            })
             .collect();
+        by_node.sort_unstable();
         let mut e = Vec::with_capacity(nn);
-        for c in order_by_key(&lo, n) {
+        for (_, c) in by_node {
             let c = c as usize;
             e.clear();
             e.extend(

@@ -117,15 +117,15 @@ pub(crate) fn parts_in(mesh: &Mesh, part: &[u32], parts: usize, order: &[u32]) -
             let mut e = Vec::with_capacity(8);
             for (gk, g) in mesh.cells.groups().iter().enumerate() {
                 // By their smallest local node: a node's cells then lie close in memory.
-                let lo: Vec<u32> = cells[q][gk]
+                let mut by_node: Vec<(u32, u32)> = cells[q][gk]
                     .iter()
                     .map(|&c| {
                         let lo = g.element(c).iter().map(|&v| local[v as usize]).min();
-                        lo.unwrap_or(0)
+                        (lo.unwrap_or(0), c as u32)
                     })
                     .collect();
-                for k in order_by_key(&lo, gids.len()) {
-                    let c = cells[q][gk][k as usize];
+                by_node.sort_unstable();
+                for c in by_node.into_iter().map(|(_, c)| c as usize) {
                     e.clear();
                     e.extend(g.element(c).iter().map(|&v| local[v as usize]));
                     m.cells.push(g.kind, &e, None);
@@ -157,49 +157,9 @@ pub(crate) fn parts_in(mesh: &Mesh, part: &[u32], parts: usize, order: &[u32]) -
         .collect()
 }
 
-/// The indices of `keys` (each < `n_keys`) by increasing key, ties by increasing index: the
-/// order of the sorted (key, index) pairs, by a counting sort (linear; sorting the 6M
-/// cells of the 1M-node grid by their smallest node was a comparison sort, twice on rank 0).
-pub(crate) fn order_by_key(keys: &[u32], n_keys: usize) -> Vec<u32> {
-    let mut at = vec![0u32; n_keys + 1];
-    for &k in keys {
-        at[k as usize + 1] += 1;
-    }
-    for i in 0..n_keys {
-        at[i + 1] += at[i];
-    }
-    let mut out = vec![0u32; keys.len()];
-    for (i, &k) in keys.iter().enumerate() {
-        out[at[k as usize] as usize] = i as u32;
-        at[k as usize] += 1;
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn counting_order_is_the_order_of_sorted_key_index_pairs() {
-        // Keys with repeats and gaps, from a fixed linear congruential sequence.
-        let mut x = 12_345u64;
-        let keys: Vec<u32> = (0..1000)
-            .map(|_| {
-                x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
-                ((x >> 33) % 97) as u32
-            })
-            .collect();
-        let mut pairs: Vec<(u32, u32)> = keys
-            .iter()
-            .enumerate()
-            .map(|(i, &k)| (k, i as u32))
-            .collect();
-        pairs.sort_unstable();
-        let want: Vec<u32> = pairs.iter().map(|p| p.1).collect();
-        assert_eq!(order_by_key(&keys, 100), want);
-        assert!(order_by_key(&[], 5).is_empty());
-    }
 
     #[test]
     fn bisection_balances_parts_and_cut_keeps_every_cell_on_its_nodes_owners() {
