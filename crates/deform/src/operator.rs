@@ -2,6 +2,7 @@
 //! matrix, its preconditioner, the couplings to prescribed nodes and the skin elements'
 //! initial frames, built once per state; and the linear solve with the chosen solver.
 
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use mesh::{Adjacency, Mesh};
@@ -19,8 +20,12 @@ use crate::options::{DeformOptions, SolverKind};
 use crate::report::{PhaseTimes, Steps};
 use crate::rfield::{element_size, skin_points};
 use crate::rotation::frame;
+use crate::solve::held::held_mask;
 use crate::solve::{Amg, AmgOptions};
 use crate::stiffness::{Stiffness, springs};
+
+/// A constrained multigrid ([`Amg::new_held`]) and the held mask it was built for.
+type HeldAmg = (Vec<u8>, Amg<'static, f32>);
 
 /// The preconditioner of the solves (none for the point iteration).
 pub(crate) enum Pre<'a> {
@@ -41,6 +46,9 @@ pub(crate) struct Operator {
     /// Per skin element: S̄⁻¹ of its initial frame (Eq. 25) and its size (the weight of its
     /// rotation at its nodes); None for a degenerate element.
     pub skin: Vec<Option<(Matrix3<f64>, f64)>>,
+    /// The constrained multigrid of the last constraints the linearised solves had, built
+    /// on first use ([`Amg::new_held`]).
+    held: Mutex<Option<Arc<HeldAmg>>>,
 }
 
 impl Operator {
@@ -105,6 +113,7 @@ impl Operator {
             pre,
             couplings,
             skin,
+            held: Mutex::new(None),
         })
     }
 
@@ -173,10 +182,33 @@ impl Operator {
         };
         let so = SolveOptions { rel_tol, max_iters };
         match &self.pre {
+            // With constraints, the constrained multigrid (docs/crates/deform.md, "The
+            // constrained multigrid"); should its set-up fail, the free one (a valid, slower
+            // preconditioner of the same system).
+            Pre::Amg(m) if !cons.is_empty() => match self.held(cons) {
+                Ok(h) => pcg(&op, b, x, &h.1, cons, &so),
+                Err(_) => pcg(&op, b, x, m, cons, &so),
+            },
             Pre::Amg(m) => pcg(&op, b, x, m, cons, &so),
             Pre::Jacobi(m) => pcg(&op, b, x, m, cons, &so),
             Pre::None => pcg(&op, b, x, &Jacobi::new(self.matrix()), cons, &so),
         }
+    }
+}
+
+impl Operator {
+    /// The constrained multigrid for `cons` (the last one built, when its held components
+    /// are the same).
+    fn held(&self, cons: &Constraints) -> Result<Arc<HeldAmg>> {
+        let mask = held_mask(self.matrix().n(), cons);
+        let mut cached = self.held.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(h) = cached.as_ref().filter(|h| h.0 == mask) {
+            return Ok(h.clone());
+        }
+        let a = Amg::new_held(self.matrix().clone(), &AmgOptions::default(), &mask)?;
+        let h = Arc::new((mask, a));
+        *cached = Some(h.clone());
+        Ok(h)
     }
 }
 

@@ -3,6 +3,7 @@
 //! gradients; the `sparse` items it is used with are re-exported here.
 
 pub mod amg;
+pub(crate) mod held;
 
 pub use amg::{Amg, AmgInfo, AmgOptions, LevelSetup};
 pub use sparse::{

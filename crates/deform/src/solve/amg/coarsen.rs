@@ -14,16 +14,24 @@ use super::{AmgOptions, Level, LevelSetup};
 
 /// One coarsening step of the set-up (level `depth` → `depth + 1`): aggregation, smoothed
 /// prolongator, restriction and Galerkin product. `None` when the coarsening stalls.
+///
+/// `mask`: per node of `cur`, the components it is held in (bit c; see
+/// [`super::Amg::new_held`]), or None. With a mask, an aggregate holds nodes of one mask
+/// only, and the prolongator's smoothing lumps a coupling between two masks onto the
+/// row's own aggregate (as if the coupling were dropped from A, its row sum kept): a row of
+/// P then reaches only aggregates of its own mask, so a component held at some nodes is
+/// zero at their aggregates, level after level. Also returns the coarse nodes' masks.
 pub(super) fn coarsen<T: Entry>(
     cur: &SymMatrix<T>,
     opts: &AmgOptions,
     depth: usize,
-) -> Option<(Level, SymMatrix)> {
+    mask: Option<&[u8]>,
+) -> Option<(Level, SymMatrix, Option<Vec<u8>>)> {
     // The threshold halves on each coarser level (coarse operators have more, weaker
     // connections per row).
     let theta = opts.strength * 0.5f64.powi(depth as i32);
     let t0 = Instant::now();
-    let (agg, nagg) = aggregate(cur, theta);
+    let (agg, nagg) = aggregate(cur, theta, mask);
     let t_agg = t0.elapsed().as_secs_f64();
     if nagg == 0 || nagg * 10 > cur.n() * 9 {
         // Coarsening stalled: stop here.
@@ -34,7 +42,7 @@ pub(super) fn coarsen<T: Entry>(
     // The prolongator is stored in single precision; the coarse matrix is the Galerkin
     // product of the rounded P, so the cycle stays a symmetric positive definite
     // preconditioner (every vector stays f64).
-    let p = smoothed_prolongator(cur, &agg, nagg, opts.prolongator_damping / rho);
+    let p = smoothed_prolongator(cur, &agg, nagg, opts.prolongator_damping / rho, mask);
     let t_p = t0.elapsed().as_secs_f64();
     let r = p.transpose();
     let t_r = t0.elapsed().as_secs_f64();
@@ -46,8 +54,20 @@ pub(super) fn coarsen<T: Entry>(
         transpose: t_r - t_p,
         galerkin: t0.elapsed().as_secs_f64() - t_r,
     };
-    let level = Level { p, omega, setup };
-    Some((level, ac))
+    let coarse_mask = mask.map(|m| {
+        let mut mc = vec![0u8; nagg];
+        for (i, &g) in agg.iter().enumerate() {
+            mc[g as usize] = m[i];
+        }
+        mc
+    });
+    let level = Level {
+        p,
+        omega,
+        setup,
+        held: held_rows(mask),
+    };
+    Some((level, ac, coarse_mask))
 }
 
 /// Gershgorin bound of ρ(D⁻¹A).
@@ -65,13 +85,31 @@ pub(super) fn gershgorin<T: Entry>(a: &SymMatrix<T>) -> f64 {
         .reduce(|| 0.0, f64::max)
 }
 
-/// Greedy aggregation; returns the aggregate of every node and the aggregate count.
-pub(super) fn aggregate<T: Entry>(a: &SymMatrix<T>, theta: f64) -> (Vec<u32>, usize) {
+/// The rows of a level held in some component, with their components (empty without a
+/// mask).
+pub(super) fn held_rows(mask: Option<&[u8]>) -> Vec<(u32, u8)> {
+    mask.map_or_else(Vec::new, |m| {
+        m.iter()
+            .enumerate()
+            .filter(|(_, b)| **b != 0)
+            .map(|(i, &b)| (i as u32, b))
+            .collect()
+    })
+}
+
+/// Greedy aggregation; returns the aggregate of every node and the aggregate count. With a
+/// `mask`, nodes of different masks are never strongly connected (see [`coarsen`]).
+pub(super) fn aggregate<T: Entry>(
+    a: &SymMatrix<T>,
+    theta: f64,
+    mask: Option<&[u8]>,
+) -> (Vec<u32>, usize) {
     const NONE: u32 = u32::MAX;
     let n = a.n();
     let strong = |i: usize, p: usize| {
         let j = a.cols[p] as usize;
         a.vals[p].get().abs() >= theta * (a.diag[i] * a.diag[j]).abs().sqrt()
+            && mask.is_none_or(|m| m[i] == m[j])
     };
     let mut agg = vec![NONE; n];
     let mut nagg = 0u32;
@@ -140,12 +178,16 @@ pub(super) fn aggregate<T: Entry>(a: &SymMatrix<T>, theta: f64) -> (Vec<u32>, us
 /// a stable sort by column followed by merging (`merge_row`), bit for bit — and only the
 /// distinct entries are sorted.
 ///
+/// With a `mask`, a coupling between nodes of different masks goes to the row's own
+/// aggregate (see [`coarsen`]).
+///
 /// The values are rounded to single precision as they are stored ([`build_rows`]).
 pub(super) fn smoothed_prolongator<T: Entry>(
     a: &SymMatrix<T>,
     agg: &[u32],
     nagg: usize,
     omega: f64,
+    mask: Option<&[u8]>,
 ) -> Transfer {
     let (offsets, entries) = build_rows(
         a.n(),
@@ -157,7 +199,12 @@ pub(super) fn smoothed_prolongator<T: Entry>(
             add(agg[i], 1.0 - omega);
             let s = omega / a.diag[i];
             for p in a.offsets[i]..a.offsets[i + 1] {
-                add(agg[a.cols[p] as usize], -s * a.vals[p].get());
+                let j = a.cols[p] as usize;
+                let g = match mask {
+                    Some(m) if m[i] != m[j] => agg[i],
+                    _ => agg[j],
+                };
+                add(g, -s * a.vals[p].get());
             }
             buf.sort_unstable_by_key(|e| e.0);
         },

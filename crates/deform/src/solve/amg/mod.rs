@@ -32,6 +32,8 @@ mod galerkin;
 mod transfer;
 
 #[cfg(test)]
+mod held_tests;
+#[cfg(test)]
 mod tests;
 
 use std::sync::Mutex;
@@ -99,6 +101,9 @@ struct Level {
     omega: f64,
     /// What building the next coarser level took.
     setup: LevelSetup,
+    /// The rows of this level held in some component, and those components (bit c): empty
+    /// unless the hierarchy was built with [`Amg::new_held`].
+    held: Vec<(u32, u8)>,
 }
 
 /// What one coarsening step of the set-up took (see [`AmgInfo::setup`]).
@@ -125,6 +130,10 @@ pub struct Amg<'a, T: Entry = f64> {
     /// Coarse matrices A_1 … A_L (A_0 is `fine`).
     coarse: Vec<SymMatrix>,
     chol: DenseCholesky,
+    /// The coarsest level's held rows, and per component held there, the factorisation of
+    /// the coarsest matrix with those rows and columns decoupled ([`Amg::new_held`]).
+    coarsest_held: Vec<(u32, u8)>,
+    chol_held: [Option<DenseCholesky>; 3],
     sweeps: usize,
     coarse_cycles: usize,
     scratch: Mutex<Vec<Scratch>>,
@@ -162,13 +171,31 @@ pub struct AmgInfo {
 impl<'a, T: Entry> Amg<'a, T> {
     /// Builds the hierarchy for `a` (symmetric positive definite, positive diagonal).
     pub fn new(a: &'a SymMatrix<T>, opts: &AmgOptions) -> Result<Self> {
-        Self::build(std::borrow::Cow::Borrowed(a), opts)
+        Self::build(std::borrow::Cow::Borrowed(a), opts, None)
     }
 
     /// [`Amg::new`] taking the fine matrix by value (the hierarchy can then be stored and
     /// reused, e.g. by [`crate::Deformer`]).
     pub fn new_owned(a: SymMatrix<T>, opts: &AmgOptions) -> Result<Amg<'static, T>> {
-        Amg::build(std::borrow::Cow::Owned(a), opts)
+        Amg::build(std::borrow::Cow::Owned(a), opts, None)
+    }
+
+    /// The hierarchy of the constrained system: the fine matrix `a` with component c of
+    /// node i held at zero where bit c of `mask[i]` is set (a node sliding on the plane
+    /// y = 0 is held in y). Aggregates and prolongator rows never mix nodes of different
+    /// masks, so on every level the held components live on their own aggregates; the
+    /// cycle keeps them zero (its Galerkin coarse problems are those of the constrained
+    /// system, for each component) and gives them Jacobi's D⁻¹ r on the finest level, so
+    /// that it stays positive definite whatever the constraints' directions. An all-zero
+    /// mask gives [`Amg::new_owned`]'s hierarchy, bit for bit. See
+    /// docs/crates/deform.md, "The constrained multigrid".
+    pub fn new_held(a: SymMatrix<T>, opts: &AmgOptions, mask: &[u8]) -> Result<Amg<'static, T>> {
+        let mask = if mask.iter().any(|&m| m != 0) {
+            Some(mask)
+        } else {
+            None
+        };
+        Amg::build(std::borrow::Cow::Owned(a), opts, mask)
     }
 
     /// The fine matrix A_0.
@@ -176,7 +203,11 @@ impl<'a, T: Entry> Amg<'a, T> {
         &self.fine
     }
 
-    fn build(fine: std::borrow::Cow<'a, SymMatrix<T>>, opts: &AmgOptions) -> Result<Self> {
+    fn build(
+        fine: std::borrow::Cow<'a, SymMatrix<T>>,
+        opts: &AmgOptions,
+        mask: Option<&[u8]>,
+    ) -> Result<Self> {
         let a: &SymMatrix<T> = &fine;
         let c = opts.smoother_damping;
         if !(c > 0.0 && c < 2.0) {
@@ -196,25 +227,41 @@ impl<'a, T: Entry> Amg<'a, T> {
         }
         let mut levels = Vec::new();
         let mut coarse: Vec<SymMatrix> = Vec::new();
+        let mut masks: Vec<Vec<u8>> = mask.map(|m| vec![m.to_vec()]).unwrap_or_default();
         loop {
             let n = coarse.last().map_or(a.n(), |c| c.n());
             if n <= opts.max_coarse || levels.len() + 1 >= opts.max_levels {
                 break;
             }
+            let m = masks.last().map(Vec::as_slice);
             let step = match coarse.last() {
-                None => coarsen(a, opts, levels.len()),
-                Some(c) => coarsen(c, opts, levels.len()),
+                None => coarsen(a, opts, levels.len(), m),
+                Some(c) => coarsen(c, opts, levels.len(), m),
             };
-            let Some((level, ac)) = step else {
+            let Some((level, ac, mc)) = step else {
                 break;
             };
             levels.push(level);
             coarse.push(ac);
+            masks.extend(mc);
         }
         let chol = match coarse.last() {
             Some(c) => DenseCholesky::new(c, levels.len())?,
             None => DenseCholesky::new(a, 0)?,
         };
+        let coarsest_held = coarsen::held_rows(masks.last().map(Vec::as_slice));
+        let mut chol_held = [None, None, None];
+        for (c, slot) in chol_held.iter_mut().enumerate() {
+            let bit = 1u8 << c;
+            if coarsest_held.iter().any(|h| h.1 & bit != 0) {
+                let m = masks.last().map_or(&[][..], Vec::as_slice);
+                let decoupled = match coarse.last() {
+                    Some(ac) => decouple(ac, m, bit),
+                    None => decouple(a, m, bit),
+                };
+                *slot = Some(DenseCholesky::new(&decoupled, levels.len())?);
+            }
+        }
         let nc = coarse.last().map_or(a.n(), |c| c.n());
         // Levels 1 … L (the finest level works in the caller's vectors).
         let mut scratch = Vec::new();
@@ -249,6 +296,8 @@ impl<'a, T: Entry> Amg<'a, T> {
             levels,
             coarse,
             chol,
+            coarsest_held,
+            chol_held,
             sweeps: opts.sweeps.max(1),
             coarse_cycles: opts.coarse_cycles.max(1),
             scratch: Mutex::new(scratch),
@@ -286,7 +335,7 @@ impl<'a, T: Entry> Amg<'a, T> {
         prescaled: bool,
     ) -> f64 {
         if l == self.levels.len() {
-            self.chol.solve(b, out);
+            self.coarsest(b, out);
             return 0.0;
         }
         let lev = &self.levels[l];
@@ -308,14 +357,22 @@ impl<'a, T: Entry> Amg<'a, T> {
                     }
                 });
         }
+        // Held components stay zero (a no-op without held rows).
+        zero_held(&lev.held, x);
         for _ in 1..self.sweeps {
             jacobi_sweep(a, w, b, x, out);
+            zero_held(&lev.held, x);
         }
         // Restrict the residual, solve the coarse problem.
         let (next, rest) = deeper
             .split_first_mut()
             .expect("one scratch per level below the finest");
         restrict_residual(a, &lev.p, b, x, &mut next.b, &mut next.lanes);
+        let next_held = self
+            .levels
+            .get(l + 1)
+            .map_or(&self.coarsest_held, |v| &v.held);
+        zero_held(next_held, &mut next.b);
         // coarse[l] is the matrix of level l + 1.
         let ac = &self.coarse[l];
         self.cycle(ac, l + 1, &next.b, &mut next.out, &mut next.x, rest, false);
@@ -323,16 +380,53 @@ impl<'a, T: Entry> Amg<'a, T> {
             // More cycles on the coarse level: out += V(b − A out).
             for _ in 1..self.coarse_cycles {
                 ac.residual(&next.b, &next.out, &mut next.r);
+                zero_held(next_held, &mut next.r);
                 self.cycle(ac, l + 1, &next.r, &mut next.d, &mut next.x, rest, false);
                 axpy(1.0, &next.d, &mut next.out);
             }
         }
-        // Prolongate and correct; post-smoothing, the last sweep written straight to `out`.
+        // Prolongate and correct (P keeps the held components zero); post-smoothing, the
+        // last sweep written straight to `out`.
         spmv_csr_add(&lev.p, &next.out, x);
         for _ in 1..self.sweeps {
             jacobi_sweep(a, w, b, x, out);
+            zero_held(&lev.held, x);
         }
-        jacobi_sweep_into(a, w, b, x, out)
+        let mut s = jacobi_sweep_into(a, w, b, x, out);
+        if !lev.held.is_empty() {
+            // Held entries: 0 on coarse levels (their b is zero there); D⁻¹ b on the finest,
+            // where b need not vanish in the held components (a plane not along an axis).
+            for &(i, bits) in &lev.held {
+                let i = i as usize;
+                for c in 0..3 {
+                    if (bits >> c) & 1 == 1 {
+                        let v = if l == 0 { b[i][c] / a.diag[i] } else { 0.0 };
+                        s += b[i][c] * (v - out[i][c]);
+                        out[i][c] = v;
+                    }
+                }
+            }
+        }
+        s
+    }
+
+    /// The coarsest level's solve: the factorisation of the coarsest matrix, and per held
+    /// component that of the matrix with the held rows decoupled.
+    fn coarsest(&self, b: &[V3], out: &mut [V3]) {
+        self.chol.solve(b, out);
+        if self.coarsest_held.is_empty() {
+            return;
+        }
+        let mut t = vec![[0.0; 3]; b.len()];
+        for (c, f) in self.chol_held.iter().enumerate() {
+            if let Some(f) = f {
+                f.solve(b, &mut t);
+                for (o, v) in out.iter_mut().zip(&t) {
+                    o[c] = v[c];
+                }
+            }
+        }
+        zero_held(&self.coarsest_held, out);
     }
 }
 
@@ -342,7 +436,7 @@ impl<T: Entry> Amg<'_, T> {
     fn apply_cycle(&self, r: &[V3], z: &mut [V3], work: &mut [V3], prescaled: bool) -> f64 {
         if self.levels.is_empty() {
             // A single level: the dense factorisation is the preconditioner.
-            self.chol.solve(r, z);
+            self.coarsest(r, z);
             return sparse::vec3::dot(r, z);
         }
         let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
@@ -388,6 +482,42 @@ impl<T: Entry> Preconditioner for Amg<'_, T> {
             }
         }
         b + self.coarse.last().map_or(0, |c| c.bytes()) + self.chol.l.len() * 8
+    }
+}
+
+/// Sets the held components of the held rows to zero.
+fn zero_held(held: &[(u32, u8)], x: &mut [V3]) {
+    for &(i, bits) in held {
+        for c in 0..3 {
+            if (bits >> c) & 1 == 1 {
+                x[i as usize][c] = 0.0;
+            }
+        }
+    }
+}
+
+/// `a` with the couplings of the rows held in component `bit` removed (diagonal kept).
+fn decouple<M: Entry>(a: &SymMatrix<M>, mask: &[u8], bit: u8) -> SymMatrix {
+    let held = |i: usize| mask.get(i).is_some_and(|m| m & bit != 0);
+    let mut offsets = vec![0];
+    let (mut cols, mut vals) = (Vec::new(), Vec::new());
+    for i in 0..a.n() {
+        let (c, v) = a.row(i);
+        if !held(i) {
+            for (&j, x) in c.iter().zip(v) {
+                if !held(j as usize) {
+                    cols.push(j);
+                    vals.push(x.get());
+                }
+            }
+        }
+        offsets.push(cols.len());
+    }
+    SymMatrix {
+        diag: a.diag.clone(),
+        offsets,
+        cols,
+        vals,
     }
 }
 

@@ -353,8 +353,8 @@ fn galerkin_product_equals_a_sparse_map_product() {
     // 210 unknowns, and 4896 (A P in two blocks of rows).
     for (nx, ny, nz) in [(9, 8, 7), (20, 19, 18)] {
         let (a, _) = spring_grid(nx, ny, nz);
-        let (agg, nagg) = aggregate(&a, 0.0);
-        let p = smoothed_prolongator(&a, &agg, nagg, 1.6 / gershgorin(&a));
+        let (agg, nagg) = aggregate(&a, 0.0, None);
+        let p = smoothed_prolongator(&a, &agg, nagg, 1.6 / gershgorin(&a), None);
         let ac = galerkin(&a, &p, &p.transpose());
         ac.validate(1e-12).unwrap();
         // Pᵀ (A P) summed entry by entry in ordered maps.
@@ -400,9 +400,9 @@ fn galerkin_product_equals_a_sparse_map_product() {
 fn prolongator_rows_equal_sorted_merge_bit_for_bit() {
     // 4896 unknowns (two blocks of rows), and 140.
     for (a, _) in [spring_grid(20, 19, 18), spring_grid(7, 9, 6)] {
-        let (agg, nagg) = aggregate(&a, 0.0);
+        let (agg, nagg) = aggregate(&a, 0.0, None);
         let omega = 4.0 / (3.0 * gershgorin(&a));
-        let p = smoothed_prolongator(&a, &agg, nagg, omega);
+        let p = smoothed_prolongator(&a, &agg, nagg, omega, None);
         let reference = Csr::from_rows(a.n(), nagg, |i, buf| {
             buf.push((agg[i], 1.0 - omega));
             let s = omega / a.diag[i];
