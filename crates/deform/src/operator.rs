@@ -29,7 +29,7 @@ type HeldAmg = (Vec<u8>, Amg<'static, f32>);
 
 /// The preconditioner of the solves (none for the point iteration).
 pub(crate) enum Pre<'a> {
-    Amg(Amg<'a, f32>),
+    Amg(Box<Amg<'a, f32>>),
     Jacobi(Jacobi),
     None,
 }
@@ -97,9 +97,10 @@ impl Operator {
         times.assemble += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let (a, pre) = match opts.solver {
-            SolverKind::PcgMultigrid => {
-                (None, Pre::Amg(Amg::new_owned(a, &AmgOptions::default())?))
-            }
+            SolverKind::PcgMultigrid => (
+                None,
+                Pre::Amg(Box::new(Amg::new_owned(a, &AmgOptions::default())?)),
+            ),
             SolverKind::PcgJacobi => {
                 let j = Jacobi::new(&a);
                 (Some(a), Pre::Jacobi(j))
@@ -155,7 +156,7 @@ impl Operator {
             max_iters: opts.max_iters,
         };
         match &self.pre {
-            Pre::Amg(m) => pcg(a, b, x, m, cons, &so),
+            Pre::Amg(m) => pcg(a, b, x, &**m, cons, &so),
             Pre::Jacobi(m) => pcg(a, b, x, m, cons, &so),
             Pre::None => point_iteration(a, b, x, cons, 1.0, opts.step_rel_tol * step_len, &so),
         }
@@ -187,9 +188,9 @@ impl Operator {
             // preconditioner of the same system).
             Pre::Amg(m) if !cons.is_empty() => match self.held(cons) {
                 Ok(h) => pcg(&op, b, x, &h.1, cons, &so),
-                Err(_) => pcg(&op, b, x, m, cons, &so),
+                Err(_) => pcg(&op, b, x, &**m, cons, &so),
             },
-            Pre::Amg(m) => pcg(&op, b, x, m, cons, &so),
+            Pre::Amg(m) => pcg(&op, b, x, &**m, cons, &so),
             Pre::Jacobi(m) => pcg(&op, b, x, m, cons, &so),
             Pre::None => pcg(&op, b, x, &Jacobi::new(self.matrix()), cons, &so),
         }

@@ -130,13 +130,19 @@ pub struct Amg<'a, T: Entry = f64> {
     /// Coarse matrices A_1 … A_L (A_0 is `fine`).
     coarse: Vec<SymMatrix>,
     chol: DenseCholesky,
-    /// The coarsest level's held rows, and per component held there, the factorisation of
-    /// the coarsest matrix with those rows and columns decoupled ([`Amg::new_held`]).
-    coarsest_held: Vec<(u32, u8)>,
-    chol_held: [Option<DenseCholesky>; 3],
+    /// The coarsest level's held rows and factorisations ([`Amg::new_held`]; None when
+    /// nothing is held there).
+    coarsest_held: Option<Box<CoarsestHeld>>,
     sweeps: usize,
     coarse_cycles: usize,
     scratch: Mutex<Vec<Scratch>>,
+}
+
+/// The coarsest level's held rows, and per component held there, the factorisation of the
+/// coarsest matrix with those rows and columns decoupled.
+struct CoarsestHeld {
+    rows: Vec<(u32, u8)>,
+    chol: [Option<DenseCholesky>; 3],
 }
 
 /// Vectors of one coarse level of the cycle (the finest level uses the caller's vectors):
@@ -249,11 +255,11 @@ impl<'a, T: Entry> Amg<'a, T> {
             Some(c) => DenseCholesky::new(c, levels.len())?,
             None => DenseCholesky::new(a, 0)?,
         };
-        let coarsest_held = coarsen::held_rows(masks.last().map(Vec::as_slice));
+        let rows = coarsen::held_rows(masks.last().map(Vec::as_slice));
         let mut chol_held = [None, None, None];
         for (c, slot) in chol_held.iter_mut().enumerate() {
             let bit = 1u8 << c;
-            if coarsest_held.iter().any(|h| h.1 & bit != 0) {
+            if rows.iter().any(|h| h.1 & bit != 0) {
                 let m = masks.last().map_or(&[][..], Vec::as_slice);
                 let decoupled = match coarse.last() {
                     Some(ac) => decouple(ac, m, bit),
@@ -296,8 +302,12 @@ impl<'a, T: Entry> Amg<'a, T> {
             levels,
             coarse,
             chol,
-            coarsest_held,
-            chol_held,
+            coarsest_held: (!rows.is_empty()).then(|| {
+                Box::new(CoarsestHeld {
+                    rows,
+                    chol: chol_held,
+                })
+            }),
             sweeps: opts.sweeps.max(1),
             coarse_cycles: opts.coarse_cycles.max(1),
             scratch: Mutex::new(scratch),
@@ -368,10 +378,10 @@ impl<'a, T: Entry> Amg<'a, T> {
             .split_first_mut()
             .expect("one scratch per level below the finest");
         restrict_residual(a, &lev.p, b, x, &mut next.b, &mut next.lanes);
-        let next_held = self
-            .levels
-            .get(l + 1)
-            .map_or(&self.coarsest_held, |v| &v.held);
+        let next_held = match self.levels.get(l + 1) {
+            Some(v) => &v.held[..],
+            None => self.coarsest_held.as_ref().map_or(&[][..], |h| &h.rows[..]),
+        };
         zero_held(next_held, &mut next.b);
         // coarse[l] is the matrix of level l + 1.
         let ac = &self.coarse[l];
@@ -414,11 +424,11 @@ impl<'a, T: Entry> Amg<'a, T> {
     /// component that of the matrix with the held rows decoupled.
     fn coarsest(&self, b: &[V3], out: &mut [V3]) {
         self.chol.solve(b, out);
-        if self.coarsest_held.is_empty() {
+        let Some(held) = &self.coarsest_held else {
             return;
-        }
+        };
         let mut t = vec![[0.0; 3]; b.len()];
-        for (c, f) in self.chol_held.iter().enumerate() {
+        for (c, f) in held.chol.iter().enumerate() {
             if let Some(f) = f {
                 f.solve(b, &mut t);
                 for (o, v) in out.iter_mut().zip(&t) {
@@ -426,7 +436,7 @@ impl<'a, T: Entry> Amg<'a, T> {
                 }
             }
         }
-        zero_held(&self.coarsest_held, out);
+        zero_held(&held.rows, out);
     }
 }
 
