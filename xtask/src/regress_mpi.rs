@@ -338,16 +338,31 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
         ("duplicate-id", "owned by ranks"),
     ] {
         let res = mpirun(2, &ex, &["12", mode])?;
-        let err = String::from_utf8_lossy(&res.stderr);
-        let lines = err.lines().filter(|l| l.contains(text)).count();
-        let code = res.status.code();
-        println!("regress: mpi bad partition ({mode}): exit {code:?}, {lines} rank(s) reported it");
-        // timeout exits 124 on a hang; mpirun exits 1 when its ranks do.
-        if code != Some(1) || lines != 2 {
-            drift.push(format!(
-                "mpi: bad partition ({mode}): exit {code:?}, {lines} of 2 ranks printed \"{text}\""
-            ));
-        }
+        let what = format!("mpi bad partition ({mode})");
+        every_rank_failed(&res, 2, &what, |l| l.contains(text), text, drift);
     }
     Ok(())
+}
+
+/// Checks that an `mpirun` of `ranks` ranks exited 1 with one line of standard error per
+/// rank that `reports` accepts (`text` names what those lines say); prints the figures
+/// and records a drift otherwise. `timeout` exits 124 on a hang; mpirun exits 1 when its
+/// ranks do.
+pub(crate) fn every_rank_failed(
+    res: &Output,
+    ranks: usize,
+    what: &str,
+    reports: impl Fn(&str) -> bool,
+    text: &str,
+    drift: &mut Vec<String>,
+) {
+    let err = String::from_utf8_lossy(&res.stderr);
+    let lines = err.lines().filter(|l| reports(l)).count();
+    let code = res.status.code();
+    println!("regress: {what}: exit {code:?}, {lines} rank(s) reported it");
+    if code != Some(1) || lines != ranks {
+        drift.push(format!(
+            "{what}: exit {code:?}, {lines} of {ranks} ranks printed \"{text}\""
+        ));
+    }
 }
