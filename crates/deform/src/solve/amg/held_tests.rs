@@ -4,12 +4,9 @@ use sparse::generate::spring_grid;
 use sparse::vec3::{self, V3};
 use sparse::{Constraint, Constraints, Jacobi, Preconditioner, SolveOptions, SymMatrix, pcg};
 
+use super::tests::bits;
 use super::*;
 use crate::solve::held::held_mask;
-
-fn bits(v: &[V3]) -> Vec<u64> {
-    v.iter().flatten().map(|x| x.to_bits()).collect()
-}
 
 /// A smooth field with every component non-zero at every node.
 fn field(n: usize, seed: f64) -> Vec<V3> {

@@ -15,7 +15,8 @@ fn flat(v: &[V3]) -> Vec<f64> {
     v.iter().flat_map(|a| a.iter().copied()).collect()
 }
 
-fn bits(v: &[V3]) -> Vec<u64> {
+/// The bits of every component, for bit-for-bit comparisons.
+pub(super) fn bits(v: &[V3]) -> Vec<u64> {
     v.iter().flatten().map(|x| x.to_bits()).collect()
 }
 
