@@ -1,6 +1,6 @@
 //! The collective operations the distributed deformation uses, over rsmpi: all-reduced sums,
-//! maxima and minima, the agreement on errors that precedes every blocking exchange, and the
-//! variable all-to-all of integer and float lists.
+//! maxima and minima, the agreement on errors that precedes every blocking exchange, the
+//! broadcast of a list from one rank, and the variable all-to-all of integer and float lists.
 
 use mpi::collective::SystemOperation;
 use mpi::datatype::{Equivalence, Partition, PartitionMut};
@@ -63,16 +63,29 @@ pub fn first_failure<T, E>(
     if first == i32::MAX {
         return None;
     }
-    let mut text: Vec<u8> = match local {
+    let text: Vec<u8> = match local {
         Err(e) if me == first => message(e).into_bytes(),
         _ => Vec::new(),
     };
-    let mut len = text.len() as u64;
-    let root = comm.process_at_rank(first);
-    root.broadcast_into(&mut len);
-    text.resize(len as usize, 0);
-    root.broadcast_into(&mut text[..]);
+    let text = broadcast_vec(comm, first, text);
     Some((first, String::from_utf8_lossy(&text).into_owned()))
+}
+
+/// Rank `root`'s `v`, on every rank: its length, then its entries (collective; the other
+/// ranks' `v` is ignored).
+pub(crate) fn broadcast_vec<T: Equivalence + Copy + Default>(
+    comm: &Comm,
+    root: i32,
+    mut v: Vec<T>,
+) -> Vec<T> {
+    let from = comm.process_at_rank(root);
+    let mut len = v.len() as u64;
+    from.broadcast_into(&mut len);
+    v.resize(len as usize, T::default());
+    if len > 0 {
+        from.broadcast_into(&mut v[..]);
+    }
+    v
 }
 
 /// The ranks agree on `local`: when any rank failed, every rank returns the error of the

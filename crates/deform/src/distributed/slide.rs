@@ -14,7 +14,7 @@ use mpi::traits::*;
 use sparse::vec3::{axpy, dot};
 use sparse::{Constraints, V3};
 
-use super::comm::{Comm, agree, max, min, offsets, sum, sum_u64};
+use super::comm::{Comm, agree, broadcast_vec, max, min, offsets, sum, sum_u64};
 use super::halo::Halo;
 use super::partition::Partition;
 use super::solve::DistOperator;
@@ -73,20 +73,14 @@ impl Slide {
         part: &Partition,
         sys: &System,
     ) -> Result<Self> {
-        let rank0 = comm.process_at_rank(0);
-        let mut flat: Vec<f64> = if comm.rank() == 0 {
+        let flat: Vec<f64> = if comm.rank() == 0 {
             root.iter()
                 .flat_map(|s| encode(u64::from(s.node), s.kind, s.param))
                 .collect()
         } else {
             Vec::new()
         };
-        let mut len = flat.len() as u64;
-        rank0.broadcast_into(&mut len);
-        flat.resize(len as usize, 0.0);
-        if len > 0 {
-            rank0.broadcast_into(&mut flat[..]);
-        }
+        let flat = broadcast_vec(comm, 0, flat);
         let g = &part.grid;
         let local: HashMap<u64, u32> = g.global_ids[..g.n_owned]
             .iter()

@@ -12,7 +12,7 @@
 //!   sums in the same order, whatever the order in which nodes are settled. ℓ is 0.2 × the
 //!   diagonal of the moving nodes' bounding box over the ranks.
 
-use super::comm::{Comm, max, min, sum_n, sum_u64};
+use super::comm::{Comm, broadcast_vec, max, min, sum_n, sum_u64};
 use super::partition::Partition;
 use crate::bc::NodeRole;
 use crate::stiffness::{NodeVolumes, Springs, Stiffness, WALL_SCALE, mean_volume};
@@ -118,20 +118,14 @@ pub(crate) fn edge_distance(
 /// [`edge_distance`] over the ranks. Collective.
 pub(crate) fn reach_weights(comm: &Comm, part: &Partition, root: &[bool], reach: f64) -> Vec<f64> {
     use mpi::traits::*;
-    let rank0 = comm.process_at_rank(0);
-    let mut ids: Vec<u64> = if comm.rank() == 0 {
+    let ids: Vec<u64> = if comm.rank() == 0 {
         (0..root.len() as u64)
             .filter(|&g| root[g as usize])
             .collect()
     } else {
         Vec::new()
     };
-    let mut len = ids.len() as u64;
-    rank0.broadcast_into(&mut len);
-    ids.resize(len as usize, 0);
-    if len > 0 {
-        rank0.broadcast_into(&mut ids[..]);
-    }
+    let ids = broadcast_vec(comm, 0, ids);
     let g = &part.grid;
     let local: std::collections::HashMap<u64, usize> = g
         .global_ids
