@@ -55,6 +55,11 @@ pub struct DistReport {
     pub rotation_iterations: usize,
     /// Largest final relative residual of the Eq. 21 solves.
     pub residual: f64,
+    /// The Eq. 21 solver of the last increment, e.g. `pcg-schwarz-amg-coarse-held`: the
+    /// block (`block-amg`, `schwarz-amg` with the overlap, `block-jacobi`), `-coarse` with
+    /// the coarse-grid correction, `-held` when the block multigrid is the constrained one
+    /// (docs/mpi.md, "Preconditioner"); empty when nothing moved.
+    pub solver: String,
     /// Bytes sent by all ranks in one halo exchange of the unknowns (one product A p).
     pub bytes_per_iteration: u64,
     /// Aggregates of the coarse-grid correction over the ranks (0: none).
@@ -426,6 +431,7 @@ impl<'c> Deformer<'c> {
             let mut params = slide.map_or_else(Vec::new, Slide::initial_params);
             let (mut iterations, mut rot_iterations, mut residual) = (0, 0, 0.0f64);
             let (mut slide_iterations, mut slide_update) = (0, 0.0f64);
+            let mut solver = String::new();
             for m in 1..=inc {
                 let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
                 let o =
@@ -435,6 +441,9 @@ impl<'c> Deformer<'c> {
                 residual = residual.max(o.2);
                 slide_iterations += o.3.iterations;
                 slide_update = slide_update.max(o.3.update);
+                if !o.4.is_empty() {
+                    solver = o.4;
+                }
             }
             let t = Instant::now();
             let (min1, bad1) = self.quality(&cells, &cur);
@@ -455,6 +464,7 @@ impl<'c> Deformer<'c> {
             rep.iterations = iterations;
             rep.rotation_iterations = rot_iterations;
             rep.residual = max(comm, residual);
+            rep.solver = solver;
             rep.min_quality = [min0, min1];
             rep.nonpositive = [bad0, bad1];
             let mut supports = Vec::new();
@@ -479,7 +489,8 @@ impl<'c> Deformer<'c> {
 
     /// One increment to the fraction `s` of the motion, from `cur` (local nodes, ghosts
     /// up to date) and the sliding nodes' parameters `params`; returns the Eq. 21 and Eq. 26
-    /// iterations, the final residual and what the sliding on supports did.
+    /// iterations, the final residual, what the sliding on supports did and the Eq. 21
+    /// solver's name (empty when nothing moved).
     fn increment(
         &self,
         s: f64,
@@ -487,7 +498,7 @@ impl<'c> Deformer<'c> {
         params: &mut [[f64; 2]],
         coarse: Option<&CoarseSpace>,
         sec: &mut DistSeconds,
-    ) -> Result<(usize, usize, f64, SlideOutcome)> {
+    ) -> Result<(usize, usize, f64, SlideOutcome, String)> {
         let (comm, opts, part, sys) = (self.comm, &self.opts, &self.local.part, &self.sys);
         let cls = &self.local.cls;
         let x0 = &part.grid.mesh.coords;
@@ -516,7 +527,7 @@ impl<'c> Deformer<'c> {
         }
         let max_disp = max(comm, max_disp);
         if max_disp == 0.0 {
-            return Ok((0, 0, 0.0, SlideOutcome::default()));
+            return Ok((0, 0, 0.0, SlideOutcome::default(), String::new()));
         }
         let t = Instant::now();
         let mut sp = match opts.stiffness {
@@ -593,6 +604,8 @@ impl<'c> Deformer<'c> {
             Some(sl) => sl.constraints(comm, &sys.cons, params)?,
             None => sys.cons.clone(),
         };
+        // Eq. 26 is solved: the block multigrid becomes the constrained one of Eq. 21.
+        op.hold(comm, &self.unk_halo, &cons);
         let r = op.solve(
             comm,
             &self.unk_halo,
@@ -637,7 +650,7 @@ impl<'c> Deformer<'c> {
         part.halo.exchange(comm, cur);
         sec.solve += t.elapsed().as_secs_f64();
         let iterations = r.iterations + so.solver_iterations;
-        Ok((iterations, rf.iterations, r.rel_residual, so))
+        Ok((iterations, rf.iterations, r.rel_residual, so, r.solver))
     }
 
     /// This rank's piece of the grid at its local coordinates `coords` (a result's

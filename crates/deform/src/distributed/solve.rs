@@ -13,11 +13,12 @@ use sparse::vec3::{V3, axpy, axpy_xpby, dot};
 use sparse::{Constraints, Csr, Jacobi, Preconditioner, SolveReport, SymMatrix};
 
 use super::coarse::CoarseOp;
-use super::comm::{Comm, agree, sum, sum_n};
+use super::comm::{Comm, agree, max, sum, sum_n};
 use super::halo::Halo;
 use crate::assembly::{System, assemble, couplings};
 use crate::error::Result;
 use crate::options::{DeformOptions, SolverKind};
+use crate::solve::held::held_mask;
 use crate::solve::{Amg, AmgOptions};
 use crate::stiffness::Springs;
 
@@ -58,6 +59,9 @@ pub(crate) struct DistOperator {
     pub couplings: Csr,
     /// The coarse-grid correction across the ranks (none on one rank).
     pub coarse: Option<CoarseOp>,
+    /// The block multigrid is the constrained one on some rank ([`DistOperator::hold`]; the
+    /// same on every rank).
+    held: bool,
 }
 
 /// The vectors of one solve, allocated once.
@@ -167,7 +171,49 @@ impl DistOperator {
             overlap_halo,
             couplings,
             coarse: None,
+            held: false,
         })
+    }
+
+    /// Replaces the block multigrid by the constrained one of `cons` ([`Amg::new_held`]:
+    /// the unknowns' held components from their constraints, the ghosts' from their
+    /// owners' through the halo), for the constrained solves of Eq. 21 that follow; the
+    /// free one was Eq. 26's. Collective. A rank without held unknowns in its block keeps
+    /// its free multigrid (the same hierarchy); should the set-up fail on a rank, that rank
+    /// keeps its free multigrid too (a valid, slower preconditioner of the same system).
+    /// The solver's name gets `-held` when some rank holds (docs/mpi.md, "Preconditioner").
+    pub fn hold(&mut self, comm: &Comm, halo: &Halo, cons: &Constraints) {
+        let n_all = self.ghost.ncols;
+        let mask = held_mask(self.n_own, cons);
+        let ext_mask = self.overlap_halo.then(|| {
+            let mut v = vec![[0.0f64; 1]; n_all];
+            for (vk, &m) in v.iter_mut().zip(&mask) {
+                vk[0] = f64::from(m);
+            }
+            halo.exchange(comm, &mut v);
+            v.iter().map(|x| x[0] as u8).collect::<Vec<u8>>()
+        });
+        let opts = AmgOptions::default();
+        match &mut self.block {
+            // Nothing held on this rank: the free multigrid is the constrained one.
+            Block::Amg(_) if mask.iter().all(|&m| m == 0) => {}
+            Block::Overlap(..) if ext_mask.as_ref().is_none_or(|k| k.iter().all(|&m| m == 0)) => {}
+            Block::Amg(m) => {
+                if let Ok(h) = Amg::new_held(m.fine().clone(), &opts, &mask) {
+                    **m = h;
+                    self.held = true;
+                }
+            }
+            Block::Overlap(m, ..) => {
+                let mask = ext_mask.expect("the extended block's mask");
+                if let Ok(h) = Amg::new_held(m.fine().clone(), &opts, &mask) {
+                    **m = h;
+                    self.held = true;
+                }
+            }
+            Block::Jacobi(..) => {}
+        }
+        self.held = max(comm, f64::from(u8::from(self.held))) > 0.0;
     }
 
     /// The owned–owned block.
@@ -359,6 +405,11 @@ impl DistOperator {
             (Block::Overlap(..), Some(_)) => "schwarz-amg-coarse",
             (_, None) => "block-jacobi",
             (_, Some(_)) => "block-jacobi-coarse",
+        };
+        let name = if self.held {
+            format!("{name}-held")
+        } else {
+            name.to_string()
         };
         let mut it = 0;
         if rr.sqrt() > rel_tol * scale {
