@@ -322,6 +322,7 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
         // The symmetry plane's nodes are held in y: Eq. 21's block multigrid is the
         // constrained one (`DistOperator::hold`).
         held_solver(dist, &format!("mpi: -n {n}"), drift);
+        quality_matches_file(&bin, &o, &report["quality_after"], n, drift)?;
     }
     pieces(&bin, &g, &grid, &serial, &out, drift)?;
     crate::regress_mpi_study::run(root, &bin, drift)?;
@@ -359,6 +360,41 @@ pub(crate) fn held_solver(dist: &serde_json::Value, what: &str, drift: &mut Vec<
             "{what}: Eq. 21 solver {solver:?}, not the constrained block multigrid (…-held)"
         ));
     }
+}
+
+/// Checks that the report's `quality_after`, summarised over the ranks, is the serial
+/// summary of the written grid `o` (`aeroshape mesh info --json`): counts, minimum, 1st
+/// percentile and maximum exactly, the mean (summed in another order) to 1e-12 relative.
+fn quality_matches_file(
+    bin: &Path,
+    o: &Path,
+    reported: &serde_json::Value,
+    n: usize,
+    drift: &mut Vec<String>,
+) -> Result<(), String> {
+    let info = Command::new(bin)
+        .args(["mesh", "info", "--json"])
+        .arg(o)
+        .output()
+        .map_err(|e| format!("{}: {e}", bin.display()))?;
+    let info: serde_json::Value = serde_json::from_slice(&info.stdout)
+        .map_err(|e| format!("{}: mesh info: {e}", o.display()))?;
+    let file = &info["quality"];
+    for key in ["count", "measured", "min", "p1", "max", "n_nonpositive"] {
+        if file[key].is_null() || file[key] != reported[key] {
+            drift.push(format!(
+                "mpi: -n {n}: quality_after.{key} {} over the ranks, {} of the written grid",
+                reported[key], file[key]
+            ));
+        }
+    }
+    let (a, b) = (reported["mean"].as_f64(), file["mean"].as_f64());
+    if !matches!((a, b), (Some(a), Some(b)) if (a - b).abs() <= 1e-12 * b.abs()) {
+        drift.push(format!(
+            "mpi: -n {n}: quality_after.mean {a:?} over the ranks, {b:?} of the written grid"
+        ));
+    }
+    Ok(())
 }
 
 /// Checks that an `mpirun` of `ranks` ranks exited 1 with one line of standard error per

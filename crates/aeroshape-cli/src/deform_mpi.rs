@@ -28,9 +28,9 @@ struct Report<'a> {
     input: String,
     output: String,
     cells: usize,
-    /// The whole grid's quality (gathered output only; the pieces' are in `distributed`).
-    quality_before: Option<mesh::quality::Summary>,
-    quality_after: Option<mesh::quality::Summary>,
+    /// The whole grid's cell quality before and after, summarised over the ranks.
+    quality_before: mesh::quality::Summary,
+    quality_after: mesh::quality::Summary,
     /// The pieces of a `.pvtu` output.
     pieces: Vec<String>,
     seconds_read: f64,
@@ -172,7 +172,6 @@ fn deform_on(
             let supports = d.gather_supports(&out);
             match (input, gathered) {
                 (Some((m, _, _)), Some(coords)) => {
-                    let q = Some(quality(&m, &coords));
                     let t = Instant::now();
                     let mut m = m;
                     m.coords = coords;
@@ -183,7 +182,7 @@ fn deform_on(
                             report(
                                 args,
                                 &m,
-                                q,
+                                out.quality,
                                 Vec::new(),
                                 &out.report,
                                 [seconds_read, t.elapsed().as_secs_f64()],
@@ -203,7 +202,7 @@ fn deform_on(
                 report(
                     args,
                     m,
-                    None,
+                    out.quality,
                     sources,
                     &out.report,
                     [seconds_read, t.elapsed().as_secs_f64()],
@@ -246,14 +245,6 @@ pub fn pieces(path: &std::path::Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("pvtu"))
 }
 
-/// The whole grid's quality before and after (rank 0).
-fn quality(m: &mesh::Mesh, coords: &[[f64; 3]]) -> [mesh::quality::Summary; 2] {
-    [
-        mesh::quality::summary(&mesh::quality::cell_quality(m)),
-        mesh::quality::summary(&mesh::quality::cell_quality_at(m, coords)),
-    ]
-}
-
 /// Every rank writes its piece `DIR/NAME/NAME_<rank>.vtu` of the output `DIR/NAME.pvtu`
 /// (the nodes it holds, the cells and boundary elements it counts; point data the
 /// displacement); returns the pieces' paths relative to DIR once every rank has written
@@ -294,7 +285,7 @@ fn write_pieces(
 fn report(
     args: &DeformArgs,
     m: &mesh::Mesh,
-    quality: Option<[mesh::quality::Summary; 2]>,
+    quality: [mesh::quality::Summary; 2],
     pieces: Vec<String>,
     rep: &distributed::DistReport,
     [seconds_read, t_write]: [f64; 2],
@@ -307,8 +298,8 @@ fn report(
         input: args.mesh.display().to_string(),
         output: args.output.display().to_string(),
         cells: m.cells.len(),
-        quality_before: quality.map(|q| q[0]),
-        quality_after: quality.map(|q| q[1]),
+        quality_before: quality[0],
+        quality_after: quality[1],
         pieces,
         seconds_read,
         seconds_write: t_write,

@@ -15,12 +15,16 @@
 //! A_c = Pᵀ A P gathered on every rank and factorised there by the envelope Cholesky of
 //! `sparse` in reverse Cuthill–McKee order.
 //!
-//! Preconditioner (balancing, Mandel's BNN; Tang, Nabben, Vuik, Erlangga 2009): with
-//! Q = P A_c⁻¹ Pᵀ and B the block preconditioner,
-//! M = Q + (I − Q A) B (I − A Q),
-//! symmetric positive definite; it costs two all-reduces of 3 n_c values and two coarse
-//! solves per application, and no halo exchange (A Q r and Pᵀ A y come from the stored rows
-//! of A P).
+//! Preconditioner (A-DEF2 of Tang, Nabben, Vuik and Erlangga 2009): with Q = P A_c⁻¹ Pᵀ
+//! and B the block preconditioner,
+//! M = Q + (I − Q A) B,
+//! applied as z = y + P A_c⁻¹ (Pᵀ r − (A P)ᵀ y), y = B r: one pass over the stored rows of
+//! P and A P together, one all-reduce of 3 n_c values, one coarse solve and one pass over
+//! P, and no halo exchange. The conjugate gradients start from x₀ + Q r₀ ([`CoarseOp::start`]),
+//! so that Pᵀ r₀ = 0; from such a start A-DEF2 gives the iterates of the balancing
+//! preconditioner (Mandel's BNN) M = Q + (I − Q A) B (I − A Q) in exact arithmetic, at half
+//! its coarse work (BNN applies A Q r and Pᵀ A y separately: two all-reduces, two coarse
+//! solves and four passes). Measured: docs/perf-log/2026-12-03-mpi-adef2.md.
 
 use std::sync::Arc;
 
@@ -134,12 +138,14 @@ pub(crate) struct CoarseOp {
     /// Aggregates (columns) and values of P.
     p_col: Vec<u32>,
     p_val: Vec<f64>,
-    /// Row offsets of A P (owned unknowns).
+    /// Row offsets of P and A P together (owned unknowns): the union of their aggregates.
     off: Vec<usize>,
-    /// Aggregates (columns) of A P.
+    /// Aggregates (columns) of the union.
     col: Vec<u32>,
-    /// Values of A P.
-    val: Vec<f64>,
+    /// P's value at each entry of the union (0 where P's row lacks the aggregate).
+    pv: Vec<f64>,
+    /// A P's value at each entry of the union.
+    apv: Vec<f64>,
     chol: EnvelopeCholesky,
 }
 
@@ -292,14 +298,33 @@ impl CoarseOp {
         p_off.truncate(n_own + 1);
         p_col.truncate(p_off[n_own]);
         p_val.truncate(p_off[n_own]);
+        // P's and A P's rows merged (both in aggregate order), for the one pass of the
+        // preconditioner over the two.
+        let (mut u_off, mut u_col) = (vec![0], Vec::with_capacity(col.len()));
+        let (mut pv, mut apv) = (Vec::with_capacity(col.len()), Vec::with_capacity(col.len()));
+        for k in 0..n_own {
+            let (mut i, mut j) = (p_off[k], off[k]);
+            while i < p_off[k + 1] || j < off[k + 1] {
+                let gi = if i < p_off[k + 1] { p_col[i] } else { NONE };
+                let gj = if j < off[k + 1] { col[j] } else { NONE };
+                let g = gi.min(gj);
+                u_col.push(g);
+                pv.push(if gi == g { p_val[i] } else { 0.0 });
+                apv.push(if gj == g { val[j] } else { 0.0 });
+                i += usize::from(gi == g);
+                j += usize::from(gj == g);
+            }
+            u_off.push(u_col.len());
+        }
         Ok(Self {
             n,
             p_off,
             p_col,
             p_val,
-            off,
-            col,
-            val,
+            off: u_off,
+            col: u_col,
+            pv,
+            apv,
             chol,
         })
     }
@@ -317,44 +342,37 @@ impl CoarseOp {
         out
     }
 
-    /// A_c⁻¹ Pᵀ r (collective).
-    pub fn coarse_of(&self, comm: &Comm, r: &[V3]) -> Vec<V3> {
+    /// A_c⁻¹ Σ_k (P_k r_k − (A P)_k y_k) over the owned rows k of every rank, that is
+    /// A_c⁻¹ (Pᵀ r − Pᵀ A y) (A symmetric), in one pass over the rows of P and A P
+    /// (collective).
+    pub fn coarse_of(&self, comm: &Comm, r: &[V3], y: Option<&[V3]>) -> Vec<V3> {
         let mut t = vec![0.0; 3 * self.n];
         for (k, rk) in r.iter().enumerate() {
-            for e in self.p_off[k]..self.p_off[k + 1] {
-                let (g, p) = (self.p_col[e] as usize, self.p_val[e]);
+            let yk = y.map_or([0.0; 3], |y| y[k]);
+            for e in self.off[k]..self.off[k + 1] {
+                let (g, p, v) = (self.col[e] as usize, self.pv[e], self.apv[e]);
                 for q in 0..3 {
-                    t[3 * g + q] += p * rk[q];
+                    t[3 * g + q] += p * rk[q] - v * yk[q];
                 }
             }
         }
         self.solve(&Self::all_sum(comm, t))
     }
 
-    /// A_c⁻¹ (A P)ᵀ y = A_c⁻¹ Pᵀ A y (A symmetric; collective).
-    pub fn coarse_of_product(&self, comm: &Comm, y: &[V3]) -> Vec<V3> {
-        let mut t = vec![0.0; 3 * self.n];
-        for (k, yk) in y.iter().enumerate() {
+    /// The start of the conjugate gradients: x += P c and r −= Π A P c, c = A_c⁻¹ Pᵀ r, so
+    /// that Pᵀ r = 0 after (`project` is Π; collective).
+    pub fn start(&self, comm: &Comm, x: &mut [V3], r: &mut [V3], project: impl Fn(&mut [V3])) {
+        let c = self.coarse_of(comm, r, None);
+        self.add_prolonged(&c, x);
+        for (k, rk) in r.iter_mut().enumerate() {
             for e in self.off[k]..self.off[k + 1] {
-                let (g, v) = (self.col[e] as usize, self.val[e]);
+                let (g, v) = (self.col[e] as usize, self.apv[e]);
                 for q in 0..3 {
-                    t[3 * g + q] += v * yk[q];
+                    rk[q] -= v * c[g][q];
                 }
             }
         }
-        self.solve(&Self::all_sum(comm, t))
-    }
-
-    /// s −= A P c on the owned rows.
-    pub fn sub_product(&self, c: &[V3], s: &mut [V3]) {
-        for (k, sk) in s.iter_mut().enumerate() {
-            for e in self.off[k]..self.off[k + 1] {
-                let (g, v) = (self.col[e] as usize, self.val[e]);
-                for q in 0..3 {
-                    sk[q] -= v * c[g][q];
-                }
-            }
-        }
+        project(r);
     }
 
     /// z += P c on the owned unknowns.

@@ -7,6 +7,7 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
+use mesh::quality::Summary;
 use mesh::{Elements, Marker, Mesh};
 use mpi::datatype::PartitionMut;
 use mpi::traits::*;
@@ -110,6 +111,10 @@ pub struct DistDeformed {
     /// Final supports and parameters of the owned nodes that slid on geometry supports
     /// (global ids; empty without). [`Deformer::gather_supports`] brings them to rank 0.
     pub supports: Vec<(u64, Support)>,
+    /// The whole grid's cell quality before and after, summarised over the ranks (the
+    /// same summary as [`mesh::quality::summary`] of the whole field, the mean summed in
+    /// rank order).
+    pub quality: [Summary; 2],
     /// What was done.
     pub report: DistReport,
 }
@@ -390,15 +395,12 @@ impl<'c> Deformer<'c> {
         &self.local.part
     }
 
-    /// Minimum quality and count of q ≤ 0 over the ranks at the local coordinates `x`.
-    fn quality(&self, cells: &Mesh, x: &[[f64; 3]]) -> (f64, u64) {
-        let q = mesh::quality::cell_quality_at(cells, x);
-        let s = mesh::quality::summary(&q);
+    /// The quality summary over the ranks of the counted cells at the local coordinates
+    /// `x`, and its minimum (+∞ when no cell is measured) and count of q ≤ 0.
+    fn quality(&self, cells: &Mesh, x: &[[f64; 3]]) -> (Summary, f64, u64) {
+        let s = super::quality::summary(self.comm, &mesh::quality::cell_quality_at(cells, x));
         let lo = if s.measured > 0 { s.min } else { f64::INFINITY };
-        (
-            min(self.comm, lo),
-            sum_u64(self.comm, s.n_nonpositive as u64),
-        )
+        (s, lo, s.n_nonpositive as u64)
     }
 
     /// Deforms the grid for the prescribed motion of the set-up (collective).
@@ -421,7 +423,7 @@ impl<'c> Deformer<'c> {
         rep.seconds.partition = self.partition;
         let t = Instant::now();
         let cells = counted_cells(part);
-        let (min0, bad0) = self.quality(&cells, x0);
+        let (before, min0, bad0) = self.quality(&cells, x0);
         rep.seconds.quality += t.elapsed().as_secs_f64();
         let mut inc = 1usize;
         let slide = self.slide.as_ref();
@@ -446,7 +448,7 @@ impl<'c> Deformer<'c> {
                 }
             }
             let t = Instant::now();
-            let (min1, bad1) = self.quality(&cells, &cur);
+            let (after, min1, bad1) = self.quality(&cells, &cur);
             rep.seconds.quality += t.elapsed().as_secs_f64();
             let low = min1 < opts.min_quality_ratio * min0;
             if (bad1 > bad0 || low) && inc < opts.max_increments {
@@ -482,6 +484,7 @@ impl<'c> Deformer<'c> {
             return Ok(DistDeformed {
                 coords: cur,
                 supports,
+                quality: [before, after],
                 report: rep,
             });
         }

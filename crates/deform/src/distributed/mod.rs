@@ -27,6 +27,7 @@ pub mod deformer;
 mod halo;
 pub mod metis;
 pub mod partition;
+mod quality;
 pub mod rcb;
 mod rfield;
 mod scatter;

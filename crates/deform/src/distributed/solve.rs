@@ -71,8 +71,6 @@ struct Work {
     /// The residual and the correction on the extended block (overlap; else empty).
     r_ext: Vec<V3>,
     z_ext: Vec<V3>,
-    /// The coarse correction's scratch.
-    s: Vec<V3>,
 }
 
 impl DistOperator {
@@ -302,7 +300,8 @@ impl DistOperator {
     }
 
     /// z = M r (projected), M the block preconditioner B alone, or with the coarse-grid
-    /// correction Q = P A_c⁻¹ Pᵀ: M = Q + (I − Q A) B (I − A Q) (collective).
+    /// correction Q = P A_c⁻¹ Pᵀ: M = Q + (I − Q A) B (A-DEF2, see [`super::coarse`];
+    /// collective).
     fn precondition(
         &self,
         comm: &Comm,
@@ -312,26 +311,12 @@ impl DistOperator {
         z: &mut [V3],
         w: &mut Work,
     ) {
-        let Some(c) = &self.coarse else {
-            self.block(comm, halo, r, z, w);
-            cons.project(z);
-            return;
-        };
-        let c1 = c.coarse_of(comm, r);
-        w.s.copy_from_slice(r);
-        c.sub_product(&c1, &mut w.s);
-        cons.project(&mut w.s);
-        let s = std::mem::take(&mut w.s);
-        self.block(comm, halo, &s, z, w);
-        w.s = s;
+        self.block(comm, halo, r, z, w);
         cons.project(z);
-        let mut c2 = c.coarse_of_product(comm, z);
-        for (a, b) in c2.iter_mut().zip(&c1) {
-            for q in 0..3 {
-                a[q] = b[q] - a[q];
-            }
+        if let Some(coarse) = &self.coarse {
+            let c = coarse.coarse_of(comm, r, Some(z));
+            coarse.add_prolonged(&c, z);
         }
-        c.add_prolonged(&c2, z);
     }
 
     /// r = Π(b − A x) (`full[..n]` receives x); returns |r|² over the ranks.
@@ -391,13 +376,12 @@ impl DistOperator {
             work: vec![[0.0; 3]; n.max(n_ext)],
             r_ext: vec![[0.0; 3]; n_ext],
             z_ext: vec![[0.0; 3]; n_ext],
-            s: if self.coarse.is_some() {
-                vec![[0.0; 3]; n]
-            } else {
-                Vec::new()
-            },
         };
-        let rr = self.residual(comm, halo, &bp, x, &mut full, cons, &mut r);
+        let mut rr = self.residual(comm, halo, &bp, x, &mut full, cons, &mut r);
+        if let Some(c) = &self.coarse {
+            c.start(comm, x, &mut r, |v| cons.project(v));
+            rr = sum(comm, dot(&r, &r));
+        }
         let name = match (&self.block, &self.coarse) {
             (Block::Amg(_), None) => "block-amg",
             (Block::Amg(_), Some(_)) => "block-amg-coarse",
