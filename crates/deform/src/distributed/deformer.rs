@@ -92,6 +92,11 @@ pub struct DistSeconds {
     /// Of the set-up: the partition in place on every rank (made on rank 0 and scattered,
     /// or given; its checks, adjacency and halo), before the deformation's own set-up.
     pub partition: f64,
+    /// Of the partition: each rank's own work on its part once it has it (decoding it,
+    /// its checks, adjacency, ordering and halo, its nodes' roles), what a partition given
+    /// by the caller costs too; the rest of [`DistSeconds::partition`] is rank 0's read
+    /// grid cut and sent.
+    pub own_part: f64,
     /// Springs, assembly, block preconditioner.
     pub assemble: f64,
     /// The R field.
@@ -138,8 +143,9 @@ pub struct Deformer<'c> {
     unk_node: Vec<u32>,
     unk_halo: Halo,
     setup: f64,
-    /// Seconds of the set-up until the partition was in place (largest over the ranks).
-    partition: f64,
+    /// Seconds of the set-up until the partition was in place, and of it each rank's own
+    /// work on its part (largest over the ranks).
+    partition: [f64; 2],
     /// The springs' scale of the whole grid (a rank's own grid would give its rows another
     /// power of two than its neighbours' and the matrix over the ranks would not be
     /// symmetric).
@@ -262,7 +268,7 @@ impl<'c> Deformer<'c> {
     }
 
     fn set_up(comm: &'c Comm, local: Local, opts: &DeformOptions, t: Instant) -> Result<Self> {
-        let partition = max(comm, t.elapsed().as_secs_f64());
+        let partition = [t.elapsed().as_secs_f64(), local.own_seconds].map(|v| max(comm, v));
         let part = &local.part;
         let (n, n_owned) = (part.grid.mesh.n_nodes(), part.grid.n_owned);
         let is_unk = |i: usize| {
@@ -420,7 +426,7 @@ impl<'c> Deformer<'c> {
         let coarse = self.coarse_space();
         rep.coarse_aggregates = coarse.as_ref().map_or(0, CoarseSpace::len);
         rep.seconds.setup = self.setup + max(comm, t.elapsed().as_secs_f64());
-        rep.seconds.partition = self.partition;
+        [rep.seconds.partition, rep.seconds.own_part] = self.partition;
         let t = Instant::now();
         let cells = counted_cells(part);
         let (before, min0, bad0) = self.quality(&cells, x0);

@@ -35,6 +35,9 @@ pub(crate) struct Local {
     /// On rank 0 with a finite reach of R, the moving boundary of the serial deformation
     /// (`crate::deformer::moving_boundary`, whole-grid numbering); empty otherwise.
     pub root_boundary: Vec<bool>,
+    /// Seconds this rank spent on its own part once it had it: decoding it, its checks,
+    /// adjacency, ordering and halo ([`Partition`]), and its nodes' roles.
+    pub own_seconds: f64,
 }
 
 /// The ways rank 0 made the parts, as it broadcasts them (index + 1; 0: it failed).
@@ -51,6 +54,7 @@ impl Local {
         bc: &BoundaryConditions,
         opts: &DeformOptions,
     ) -> Result<Self> {
+        let t = std::time::Instant::now();
         let part = Partition::new(comm, grid)?;
         let cls = (|| {
             if let Some((name, _)) = bc
@@ -78,6 +82,7 @@ impl Local {
             made_by: "given",
             root_supports: Vec::new(),
             root_boundary: Vec::new(),
+            own_seconds: t.elapsed().as_secs_f64(),
         })
     }
 
@@ -152,6 +157,7 @@ impl Local {
             rank: 0,
             reason: "no part received".into(),
         })?;
+        let t = std::time::Instant::now();
         let (grid, mut cls, disp) = agree(comm, decode(&ints, &floats))?;
         drop((ints, floats));
         // The part's numbering is ours: its owned nodes take the serial solver's order.
@@ -173,6 +179,7 @@ impl Local {
             made_by: MADE_BY.get(how as usize - 1).copied().unwrap_or("?"),
             root_supports,
             root_boundary,
+            own_seconds: t.elapsed().as_secs_f64(),
         })
     }
 }
