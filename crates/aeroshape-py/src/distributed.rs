@@ -260,10 +260,9 @@ pub fn deform_distributed(
         .coarse_parts(coarse_parts);
         let out = d.deform().map_err(|e| errors::one_line(&e))?;
         let whole = d.gather(&out.coords);
-        let g = d.partition().grid();
         Ok(Outcome::Done {
-            ids: g.global_ids.clone(),
-            n_owned: g.n_owned,
+            ids: d.local_ids(),
+            n_owned: d.partition().grid().n_owned,
             whole,
             out: Box::new(out),
         })

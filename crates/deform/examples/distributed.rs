@@ -65,7 +65,8 @@ fn from_file(world: &deform::distributed::Comm, path: &str, deg: f64) -> ExitCod
         rel_tol: 1e-11,
         ..DeformOptions::default()
     };
-    let cut = deform::distributed::metis::cut(&whole, size, deform::distributed::Partitioner::Metis);
+    let cut =
+        deform::distributed::metis::cut(&whole, size, deform::distributed::Partitioner::Metis);
     let grid = rcb::parts(&whole, &cut.part, size).swap_remove(rank as usize);
     world.barrier();
     let largest = |t: f64| {
@@ -146,7 +147,10 @@ fn main() -> ExitCode {
     let mode = args.get(2).map_or("ok", String::as_str);
     let universe = mpi::initialize().expect("MPI initialises");
     let world = universe.world();
-    if let Some(path) = args.get(1).filter(|a| a.ends_with(".su2") || a.ends_with(".msh")) {
+    if let Some(path) = args
+        .get(1)
+        .filter(|a| a.ends_with(".su2") || a.ends_with(".msh"))
+    {
         let deg = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(2.0);
         return from_file(&world, path, deg);
     }

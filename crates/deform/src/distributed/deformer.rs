@@ -111,7 +111,8 @@ pub struct DistSeconds {
 /// report.
 #[derive(Debug, Clone)]
 pub struct DistDeformed {
-    /// New coordinates of the local nodes.
+    /// New coordinates of the local nodes (owned, then ghosts), in the caller's numbering
+    /// of a given part ([`Deformer::local_ids`]).
     pub coords: Vec<[f64; 3]>,
     /// Final supports and parameters of the owned nodes that slid on geometry supports
     /// (global ids; empty without). [`Deformer::gather_supports`] brings them to rank 0.
@@ -396,9 +397,21 @@ impl<'c> Deformer<'c> {
         ))
     }
 
-    /// This rank's partition.
+    /// This rank's partition, in the deformer's own numbering: a part given by the caller
+    /// has its owned nodes renumbered for locality ([`Deformer::local_ids`] and
+    /// [`DistDeformed::coords`] are in the caller's numbering).
     pub fn partition(&self) -> &Partition {
         &self.local.part
+    }
+
+    /// The global id of every local node in the numbering of [`DistDeformed::coords`]:
+    /// the caller's for a given part, the partition's for one made on rank 0.
+    pub fn local_ids(&self) -> Vec<u64> {
+        let ids = &self.local.part.grid.global_ids;
+        match &self.local.caller {
+            Some(perm) => perm.iter().map(|&p| ids[p as usize]).collect(),
+            None => ids.clone(),
+        }
     }
 
     /// The quality summary over the ranks of the counted cells at the local coordinates
@@ -487,6 +500,9 @@ impl<'c> Deformer<'c> {
             let s = &mut rep.seconds;
             [s.assemble, s.rotation, s.solve, s.quality] =
                 [s.assemble, s.rotation, s.solve, s.quality].map(|v| max(comm, v));
+            if let Some(perm) = &self.local.caller {
+                cur = perm.iter().map(|&p| cur[p as usize]).collect();
+            }
             return Ok(DistDeformed {
                 coords: cur,
                 supports,
@@ -699,12 +715,14 @@ impl<'c> Deformer<'c> {
         slide::gather(self.comm, &out.supports)
     }
 
-    /// The owned nodes' coordinates of every rank, gathered on rank 0 in global-id order
-    /// (`None` on the other ranks). Collective.
+    /// The owned nodes' coordinates of every rank (`coords` in the numbering of
+    /// [`DistDeformed::coords`]), gathered on rank 0 in global-id order (`None` on the other
+    /// ranks). Collective.
     pub fn gather(&self, coords: &[[f64; 3]]) -> Option<Vec<[f64; 3]>> {
         let (comm, part) = (self.comm, &self.local.part);
         let no = part.grid.n_owned;
-        let gids: Vec<u64> = part.grid.global_ids[..no].to_vec();
+        let mut gids = self.local_ids();
+        gids.truncate(no);
         let xs: Vec<f64> = coords[..no].iter().flatten().copied().collect();
         let root = comm.process_at_rank(0);
         let mut counts = vec![0i32; comm.size() as usize];
