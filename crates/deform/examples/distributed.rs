@@ -38,6 +38,19 @@ fn drop_node(g: &mut LocalGrid, v: u32) {
     g.mesh = m;
 }
 
+/// The largest distance of `x` from `serial` over the largest displacement of `serial`
+/// from `x0`.
+fn deviation(x: &[[f64; 3]], serial: &[[f64; 3]], x0: &[[f64; 3]]) -> f64 {
+    let dist =
+        |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
+    let (mut dev, mut disp) = (0.0f64, 0.0f64);
+    for ((a, b), c) in x.iter().zip(serial).zip(x0) {
+        dev = dev.max(dist(a, b));
+        disp = disp.max(dist(b, c));
+    }
+    dev / disp
+}
+
 /// The timed run on the grid file `path` (see the module's doc).
 fn from_file(world: &deform::distributed::Comm, path: &str, deg: f64) -> ExitCode {
     use std::time::Instant;
@@ -125,19 +138,13 @@ fn from_file(world: &deform::distributed::Comm, path: &str, deg: f64) -> ExitCod
             return ExitCode::from(1);
         }
     };
-    let (mut dev, mut disp) = (0.0f64, 0.0f64);
-    for ((a, b), x0) in x.iter().zip(&serial.coords).zip(&whole.coords) {
-        let d = (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
-        let m = (0..3).map(|k| (b[k] - x0[k]).powi(2)).sum::<f64>().sqrt();
-        dev = dev.max(d);
-        disp = disp.max(m);
-    }
+    let rel = deviation(&x, &serial.coords, &whole.coords);
     world.immediate_barrier().wait();
     println!(
         "serial deform::deform, 2 threads: {} iterations, {t_serial:.2} s; distributed / serial {:.2}; max deviation from the serial result: {:.3e} relative",
         serial.report.iterations,
         t_dist / t_serial,
-        dev / disp
+        rel
     );
     ExitCode::SUCCESS
 }
@@ -207,14 +214,7 @@ fn main() -> ExitCode {
             return Ok(None);
         };
         let serial = deform::deform(&whole, &bc, &opts)?;
-        let (mut dev, mut disp) = (0.0f64, 0.0f64);
-        for ((a, b), x0) in x.iter().zip(&serial.coords).zip(&whole.coords) {
-            let d = (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
-            let m = (0..3).map(|k| (b[k] - x0[k]).powi(2)).sum::<f64>().sqrt();
-            dev = dev.max(d);
-            disp = disp.max(m);
-        }
-        Ok(Some(dev / disp))
+        Ok(Some(deviation(&x, &serial.coords, &whole.coords)))
     };
     match run() {
         Ok(Some(rel)) => {
