@@ -29,14 +29,13 @@
 use std::sync::Arc;
 
 use mpi::collective::SystemOperation;
-use mpi::datatype::PartitionMut;
 use mpi::traits::*;
 use sparse::csr::merge_row;
 use sparse::envelope::EnvelopeCholesky;
 use sparse::order::reverse_cuthill_mckee;
 use sparse::{SymMatrix, V3};
 
-use super::comm::{Comm, max, offsets};
+use super::comm::{Comm, all_gather_vec, max};
 use super::halo::Halo;
 use super::rcb::rcb;
 use super::solve::DistOperator;
@@ -288,7 +287,12 @@ impl CoarseOp {
             }
             touched.clear();
         }
-        let (ti, tj, tv) = gather_all(comm, &ti, &tj, &tv);
+        // Every rank's (I, J, value) lists, concatenated in rank order on every rank.
+        let (ti, tj, tv) = (
+            all_gather_vec(comm, &ti),
+            all_gather_vec(comm, &tj),
+            all_gather_vec(comm, &tv),
+        );
         let ac = coarse_matrix(n, &ti, &tj, &tv);
         let perm = reverse_cuthill_mckee(ac.n(), |i| ac.row(i).0);
         let chol = EnvelopeCholesky::new(&ac, &perm).map_err(|e| Error::Distributed {
@@ -429,29 +433,6 @@ impl RowAcc {
         self.row.sort_unstable_by_key(|e| e.0);
         &mut self.row
     }
-}
-
-/// Every rank's (I, J, value) lists, concatenated in rank order on every rank.
-fn gather_all(comm: &Comm, i: &[u32], j: &[u32], v: &[f64]) -> (Vec<u32>, Vec<u32>, Vec<f64>) {
-    let p = comm.size() as usize;
-    let mut counts = vec![0i32; p];
-    comm.all_gather_into(&(i.len() as i32), &mut counts[..]);
-    let displs = offsets(&counts);
-    let total: usize = counts.iter().map(|&c| c as usize).sum();
-    let (mut ai, mut aj, mut av) = (vec![0u32; total], vec![0u32; total], vec![0.0f64; total]);
-    comm.all_gather_varcount_into(
-        i,
-        &mut PartitionMut::new(&mut ai[..], &counts[..], &displs[..]),
-    );
-    comm.all_gather_varcount_into(
-        j,
-        &mut PartitionMut::new(&mut aj[..], &counts[..], &displs[..]),
-    );
-    comm.all_gather_varcount_into(
-        v,
-        &mut PartitionMut::new(&mut av[..], &counts[..], &displs[..]),
-    );
-    (ai, aj, av)
 }
 
 /// A_c from its entries (duplicates summed in their order, the same on every rank).

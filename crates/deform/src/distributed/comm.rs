@@ -1,6 +1,7 @@
 //! The collective operations the distributed deformation uses, over rsmpi: all-reduced sums,
 //! maxima and minima, the agreement on errors that precedes every blocking exchange, the
-//! broadcast of a list from one rank, and the variable all-to-all of integer and float lists.
+//! broadcast of a list from one rank, the all-gather of every rank's list, and the variable
+//! all-to-all of integer and float lists.
 
 use mpi::collective::SystemOperation;
 use mpi::datatype::{Equivalence, Partition, PartitionMut};
@@ -114,6 +115,19 @@ pub(crate) fn offsets(counts: &[i32]) -> Vec<i32> {
             Some(d)
         })
         .collect()
+}
+
+/// Every rank's `v`, concatenated in rank order, on every rank (collective).
+pub(crate) fn all_gather_vec<T: Equivalence + Copy + Default>(comm: &Comm, v: &[T]) -> Vec<T> {
+    let mut counts = vec![0i32; comm.size() as usize];
+    comm.all_gather_into(&(v.len() as i32), &mut counts[..]);
+    let displs = offsets(&counts);
+    let mut all = vec![T::default(); counts.iter().map(|&c| c as usize).sum()];
+    comm.all_gather_varcount_into(
+        v,
+        &mut PartitionMut::new(&mut all[..], &counts[..], &displs[..]),
+    );
+    all
 }
 
 /// Sends `out[r]` to rank r and returns what each rank sent here (`in[r]` from rank r).

@@ -4,12 +4,11 @@
 //! no longer computes the whole grid's quality a second time, alone, after the gather.
 
 use mpi::collective::SystemOperation;
-use mpi::datatype::PartitionMut;
 use mpi::traits::*;
 
 use mesh::quality::Summary;
 
-use super::comm::{Comm, max, min, offsets, sum, sum_u64};
+use super::comm::{Comm, all_gather_vec, max, min, sum, sum_u64};
 
 /// Bins of the 1st percentile's search: the bin of the rank is found from the all-reduced
 /// counts, and only its values are gathered.
@@ -18,17 +17,17 @@ const BINS: usize = 4096;
 /// The summary over the ranks of the quality field whose share on this rank is `q` (each
 /// cell counted on one rank; NaN: not measured). Collective.
 pub(crate) fn summary(comm: &Comm, q: &[f64]) -> Summary {
-    let measured_here = q.iter().filter(|x| !x.is_nan()).count();
     let (mut lo, mut hi, mut total) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
-    let mut bad = 0u64;
+    let (mut measured_here, mut bad) = (0u64, 0u64);
     for &x in q.iter().filter(|x| !x.is_nan()) {
         lo = lo.min(x);
         hi = hi.max(x);
         total += x;
+        measured_here += 1;
         bad += u64::from(x <= 0.0);
     }
     let count = sum_u64(comm, q.len() as u64) as usize;
-    let measured = sum_u64(comm, measured_here as u64) as usize;
+    let measured = sum_u64(comm, measured_here) as usize;
     let (lo, hi) = (min(comm, lo), max(comm, hi));
     let total = sum(comm, total);
     let n_nonpositive = sum_u64(comm, bad) as usize;
@@ -81,13 +80,6 @@ fn nth_smallest(comm: &Comm, q: &[f64], rank: usize, lo: f64, hi: f64) -> f64 {
         .copied()
         .filter(|&x| !x.is_nan() && bin(x) == b)
         .collect();
-    let mut sizes = vec![0i32; comm.size() as usize];
-    comm.all_gather_into(&(mine.len() as i32), &mut sizes[..]);
-    let at = offsets(&sizes);
-    let mut all = vec![0.0f64; sizes.iter().map(|&s| s as usize).sum()];
-    comm.all_gather_varcount_into(
-        &mine[..],
-        &mut PartitionMut::new(&mut all[..], &sizes[..], &at[..]),
-    );
+    let mut all = all_gather_vec(comm, &mine);
     *all.select_nth_unstable_by(rank - below, f64::total_cmp).1
 }
