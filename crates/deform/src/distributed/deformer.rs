@@ -129,6 +129,21 @@ pub struct DistDeformed {
 /// conditions, and the supports of its classified nodes ([`Supports::nodes`]).
 pub type OnSupports<'a> = (&'a Mesh, &'a BoundaryConditions, &'a [(u32, Support)]);
 
+/// What one increment did ([`Deformer::increment`]; all zero and empty when nothing moved).
+#[derive(Default)]
+struct Increment {
+    /// Eq. 21 iterations, the sliding corrections' included.
+    iterations: usize,
+    /// Eq. 26 iterations.
+    rotation_iterations: usize,
+    /// The final relative residual of Eq. 21.
+    residual: f64,
+    /// What the sliding on supports did.
+    slide: SlideOutcome,
+    /// The Eq. 21 solver's name.
+    solver: String,
+}
+
 /// The least aggregates per rank of the coarse-grid correction by default
 /// ([`Deformer::coarse_parts`]): iterations at 1, 2 and 4 ranks in docs/mpi.md,
 /// "Coarse-grid correction".
@@ -457,13 +472,13 @@ impl<'c> Deformer<'c> {
                 let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
                 let o =
                     self.increment(s, &mut cur, &mut params, coarse.as_ref(), &mut rep.seconds)?;
-                iterations += o.0;
-                rot_iterations += o.1;
-                residual = residual.max(o.2);
-                slide_iterations += o.3.iterations;
-                slide_update = slide_update.max(o.3.update);
-                if !o.4.is_empty() {
-                    solver = o.4;
+                iterations += o.iterations;
+                rot_iterations += o.rotation_iterations;
+                residual = residual.max(o.residual);
+                slide_iterations += o.slide.iterations;
+                slide_update = slide_update.max(o.slide.update);
+                if !o.solver.is_empty() {
+                    solver = o.solver;
                 }
             }
             let t = Instant::now();
@@ -513,9 +528,7 @@ impl<'c> Deformer<'c> {
     }
 
     /// One increment to the fraction `s` of the motion, from `cur` (local nodes, ghosts
-    /// up to date) and the sliding nodes' parameters `params`; returns the Eq. 21 and Eq. 26
-    /// iterations, the final residual, what the sliding on supports did and the Eq. 21
-    /// solver's name (empty when nothing moved).
+    /// up to date) and the sliding nodes' parameters `params`; returns what it did.
     fn increment(
         &self,
         s: f64,
@@ -523,7 +536,7 @@ impl<'c> Deformer<'c> {
         params: &mut [[f64; 2]],
         coarse: Option<&CoarseSpace>,
         sec: &mut DistSeconds,
-    ) -> Result<(usize, usize, f64, SlideOutcome, String)> {
+    ) -> Result<Increment> {
         let (comm, opts, part, sys) = (self.comm, &self.opts, &self.local.part, &self.sys);
         let cls = &self.local.cls;
         let x0 = &part.grid.mesh.coords;
@@ -552,7 +565,7 @@ impl<'c> Deformer<'c> {
         }
         let max_disp = max(comm, max_disp);
         if max_disp == 0.0 {
-            return Ok((0, 0, 0.0, SlideOutcome::default(), String::new()));
+            return Ok(Increment::default());
         }
         let t = Instant::now();
         let mut sp = match opts.stiffness {
@@ -675,7 +688,13 @@ impl<'c> Deformer<'c> {
         part.halo.exchange(comm, cur);
         sec.solve += t.elapsed().as_secs_f64();
         let iterations = r.iterations + so.solver_iterations;
-        Ok((iterations, rf.iterations, r.rel_residual, so, r.solver))
+        Ok(Increment {
+            iterations,
+            rotation_iterations: rf.iterations,
+            residual: r.rel_residual,
+            slide: so,
+            solver: r.solver,
+        })
     }
 
     /// This rank's piece of the grid at its local coordinates `coords` (a result's
