@@ -16,6 +16,9 @@
 //! 4. The partition given by the caller (`distributed` example, 3 ranks) against the serial
 //!    result, and two bad partitions (a missing ghost, a global id owned twice): exit status
 //!    1 with the error on every rank, within a time limit (a hang fails).
+//! 5. A set-up reused for a second design (`distributed CELLS reuse`, 2 and 3 ranks): the
+//!    same result as a new set-up, bit for bit, on a made and a given partition; and the
+//!    distributed study's reuse of its set-up (`regress_mpi_study`).
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -246,6 +249,17 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
         "--example",
         "distributed",
     ])?;
+    crate::cargo(&[
+        "build",
+        "--release",
+        "-q",
+        "-p",
+        "aeroshape",
+        "--features",
+        "mpi",
+        "--example",
+        "distributed_study",
+    ])?;
     let bin = root.join("target/release/aeroshape");
     let out = root.join("target/regress/mpi");
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
@@ -338,6 +352,19 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
                 .next()
                 .unwrap_or("failed")
         ));
+    }
+    for n in [2usize, 3] {
+        let res = mpirun(n, &ex, &["16", "reuse"])?;
+        print!("{}", String::from_utf8_lossy(&res.stdout));
+        if !res.status.success() {
+            drift.push(format!(
+                "mpi: reused set-up, {n} ranks: {}",
+                String::from_utf8_lossy(&res.stderr)
+                    .lines()
+                    .next()
+                    .unwrap_or("failed")
+            ));
+        }
     }
     for (mode, text) in [
         ("missing-ghost", "missing ghost"),

@@ -3,7 +3,9 @@
 //! by the serial `aeroshape run` and by `mpirun -n 2` and `-n 3 --oversubscribe` of the same
 //! command: every node of the deformed grid within 1e-8 of the serial one, relative to the
 //! largest displacement, and no inverted cell; then a design vector naming no variable of the
-//! case, which every rank must refuse alike (exit status 1, no hang).
+//! case, which every rank must refuse alike (exit status 1, no hang). Last, the example
+//! `distributed_study` at 2 and 3 ranks: a second design on the study's kept set-up equals
+//! a new study's result bit for bit.
 
 use std::path::Path;
 use std::process::Command;
@@ -120,6 +122,25 @@ pub fn run(root: &Path, bin: &Path, drift: &mut Vec<String>) -> Result<(), Strin
         drift.push(format!(
             "mpi study: bad design vector: exit {code:?}, {lines} of 2 ranks named the variable"
         ));
+    }
+    // A second design on the kept set-up against a new study (the example checks and
+    // prints the gap, 0 to pass).
+    let ex = root.join("target/release/examples/distributed_study");
+    for n in [2usize, 3] {
+        let res = mpirun(n, &ex, &[&c, &dv])?;
+        print!(
+            "regress: mpi study: {}",
+            String::from_utf8_lossy(&res.stdout)
+        );
+        if !res.status.success() {
+            drift.push(format!(
+                "mpi study: kept set-up, {n} ranks: {}",
+                String::from_utf8_lossy(&res.stderr)
+                    .lines()
+                    .next()
+                    .unwrap_or("failed")
+            ));
+        }
     }
     Ok(())
 }

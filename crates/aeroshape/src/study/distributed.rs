@@ -16,18 +16,23 @@
 //!
 //! Evaluation ([`DistributedStudy::evaluate`], collective): param, model update and surface
 //! grid on every rank; then the deformation with the wall nodes' displacements (and the
-//! slide and fixed markers) of the serial study, set up afresh for each evaluation (no warm
-//! start); the grid gathered on rank 0, the wall nodes put exactly at their new places on
-//! the geometry.
+//! slide and fixed markers) of the serial study; the grid gathered on rank 0, the wall
+//! nodes put exactly at their new places on the geometry. The distributed set-up (the
+//! partition made on rank 0 and scattered, the nodes' roles, the unknowns and halos) is
+//! made at the first evaluation and kept: the next ones pass their wall displacements to
+//! it (`Deformer::deform_with`) as long as rank 0's list of prescribed nodes is the same,
+//! and make it anew when it is not. Each deformation starts from the baseline grid (no
+//! warm start).
 //!
 //! Every fallible step ends with the ranks agreeing on its outcome: an error on one rank is
 //! returned on every rank with the same text ([`StudyError::Distributed`] on the others)
 //! before any other exchange, so nothing hangs.
 
+use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use deform::distributed::{Comm, DistReport, mpi};
+use deform::distributed::{Comm, Deformer, DistReport, mpi};
 use geom_db::GeomDb;
 use geom_db::prelude::Point3;
 use mesh::{ALL_KINDS, Elements, Marker, Mesh};
@@ -69,6 +74,9 @@ pub struct DistributedStudy<'c> {
     quality_before: Quality,
     coarse_parts: usize,
     setup: SetupReport,
+    /// The distributed set-up of the last evaluation and, on rank 0, the grid nodes of its
+    /// prescribed displacements, in order (empty on the other ranks).
+    deformer: RefCell<Option<(Vec<u32>, Deformer<'c>)>>,
 }
 
 /// The result of [`DistributedStudy::evaluate`].
@@ -319,6 +327,7 @@ impl<'c> DistributedStudy<'c> {
             root,
             quality_before,
             coarse_parts: deform::distributed::COARSE_PARTS,
+            deformer: RefCell::new(None),
             setup,
             case,
         })
@@ -504,21 +513,41 @@ impl<'c> DistributedStudy<'c> {
             displacements.extend(r.fixed_nodes.iter().map(|&v| (v, [0.0; 3])));
             super::setup::deform_markers(&self.case, displacements)
         });
-        let whole = self
-            .root
+        let nodes: Vec<u32> = bc
             .as_ref()
-            .zip(bc.as_ref())
-            .map(|(r, bc)| (&r.grid, bc));
-        let opts = self.case.deform.options();
-        let d = deform::distributed::Deformer::from_root(comm, whole, &opts)
-            .map_err(|source| StudyError::DeformSetup {
-                grid: self.grid_path.clone(),
-                source: Box::new(source),
-            })?
-            .coarse_parts(self.coarse_parts);
-        let out = d.deform()?;
-        let gathered = d.gather(&out.coords);
-        Ok((out.report, gathered))
+            .map(|bc| bc.displacements.iter().map(|d| d.0).collect())
+            .unwrap_or_default();
+        let mut kept = self.deformer.borrow_mut();
+        // Rank 0 decides: the kept set-up serves when its prescribed nodes are these.
+        let mut same = u8::from(kept.as_ref().is_some_and(|k| k.0 == nodes));
+        comm.process_at_rank(0).broadcast_into(&mut same);
+        let d = match kept.take() {
+            Some((nodes, d)) if same > 0 => (nodes, d),
+            _ => {
+                let whole = self
+                    .root
+                    .as_ref()
+                    .zip(bc.as_ref())
+                    .map(|(r, bc)| (&r.grid, bc));
+                let opts = self.case.deform.options();
+                let d = Deformer::from_root(comm, whole, &opts)
+                    .map_err(|source| StudyError::DeformSetup {
+                        grid: self.grid_path.clone(),
+                        source: Box::new(source),
+                    })?
+                    .coarse_parts(self.coarse_parts);
+                (nodes, d)
+            }
+        };
+        let values: Option<Vec<[f64; 3]>> =
+            bc.map(|bc| bc.displacements.iter().map(|d| d.1).collect());
+        // A failed deformation (agreed on every rank) keeps the set-up for the next design.
+        let out = d.1.deform_with(values.as_deref()).map(|out| {
+            let gathered = d.1.gather(&out.coords);
+            (out.report, gathered)
+        });
+        *kept = Some(d);
+        Ok(out?)
     }
 
     /// The wall nodes' updated parameters written into `grid`'s node classification, as

@@ -81,6 +81,10 @@ pub struct DistReport {
     /// Largest seconds over the ranks: set-up (partition checks, unknowns), assembly and
     /// preconditioner, R field, spring solve, quality.
     pub seconds: DistSeconds,
+    /// Deformations run on this set-up, this one included ([`Deformer::deform_with`]
+    /// reuses a set-up for new displacements: from the second on, the set-up and partition
+    /// seconds are those of the first, not spent again).
+    pub deformations: usize,
 }
 
 /// Seconds per phase (largest over the ranks).
@@ -174,6 +178,11 @@ pub struct Deformer<'c> {
     slide: Option<Slide>,
     /// The weight φ of R per local node (the reach of R; empty: 1 everywhere).
     reach: Vec<f64>,
+    /// Deformations run on this set-up.
+    runs: std::cell::Cell<usize>,
+    /// The coarse space, made at the first deformation and kept (it depends on the
+    /// baseline grid and the unknowns only).
+    coarse: std::cell::OnceCell<Option<CoarseSpace>>,
 }
 
 /// True when this rank counts the element `e` of its local grid: it owns the element's node
@@ -368,6 +377,8 @@ impl<'c> Deformer<'c> {
             overlap: true,
             slide: None,
             reach: Vec::new(),
+            runs: std::cell::Cell::new(0),
+            coarse: std::cell::OnceCell::new(),
         })
     }
 
@@ -377,6 +388,7 @@ impl<'c> Deformer<'c> {
     /// grid's multigrid.
     pub fn coarse_parts(mut self, parts: usize) -> Self {
         self.coarse_parts = parts;
+        self.coarse = std::cell::OnceCell::new();
         self
     }
 
@@ -439,7 +451,55 @@ impl<'c> Deformer<'c> {
 
     /// Deforms the grid for the prescribed motion of the set-up (collective).
     pub fn deform(&self) -> Result<DistDeformed> {
+        self.run(&self.local.disp)
+    }
+
+    /// Deforms the grid for new values of the set-up's prescribed node displacements
+    /// (`BoundaryConditions::displacements`, in the order the set-up was given them), the
+    /// rest of the motion (rigid markers) as set up; `None`: those of the set-up, as
+    /// [`Deformer::deform`]. The partition, the nodes' roles, the unknowns and their halos
+    /// are kept: an optimiser's loop, whose wall moves anew at each design, pays for them
+    /// once. Which nodes are displaced is the set-up's: a node left out of it stays where
+    /// its role holds it.
+    ///
+    /// For a set-up made on rank 0 ([`Deformer::from_root`]), `displacements` are read on
+    /// rank 0 (the whole grid's list; the other ranks pass `None` or anything); for a given
+    /// partition ([`Deformer::new`]), each rank passes its own list, and the ghosts take
+    /// their owners' values. A list of another length than the set-up's, or a value that
+    /// is not finite, fails on every rank with the same error. Collective.
+    pub fn deform_with(&self, displacements: Option<&[[f64; 3]]>) -> Result<DistDeformed> {
+        let given = self.local.caller.is_some();
+        let new = if given {
+            let given = displacements.is_some();
+            // The ranks agree on whether the values are new (a given part's are per rank).
+            if min(self.comm, f64::from(u8::from(given)))
+                != max(self.comm, f64::from(u8::from(given)))
+            {
+                return Err(Error::Distributed {
+                    rank: self.comm.rank(),
+                    reason: "some ranks gave new displacements and others none".into(),
+                });
+            }
+            given
+        } else {
+            let mut on_root = u64::from(displacements.is_some());
+            self.comm.process_at_rank(0).broadcast_into(&mut on_root);
+            on_root > 0
+        };
+        if !new {
+            return self.run(&self.local.disp);
+        }
+        let disp = self
+            .local
+            .displacements(self.comm, displacements.unwrap_or(&[]))?;
+        self.run(&disp)
+    }
+
+    /// The deformation for the displacements `disp` of the local displaced nodes
+    /// (collective).
+    fn run(&self, disp: &[[f64; 3]]) -> Result<DistDeformed> {
         let (comm, opts, part) = (self.comm, &self.opts, &self.local.part);
+        self.runs.set(self.runs.get() + 1);
         let x0 = &part.grid.mesh.coords;
         let mut rep = DistReport {
             ranks: comm.size() as usize,
@@ -448,10 +508,12 @@ impl<'c> Deformer<'c> {
             ghost_nodes: sum_u64(comm, (x0.len() - part.grid.n_owned) as u64),
             partitioner: self.local.made_by.to_string(),
             bytes_per_iteration: sum_u64(comm, self.unk_halo.bytes_sent(3) as u64),
+            deformations: self.runs.get(),
             ..DistReport::default()
         };
         let t = Instant::now();
-        let coarse = self.coarse_space();
+        // Collective when made: every rank's first deformation makes it.
+        let coarse = self.coarse.get_or_init(|| self.coarse_space());
         rep.coarse_aggregates = coarse.as_ref().map_or(0, CoarseSpace::len);
         rep.seconds.setup = self.setup + max(comm, t.elapsed().as_secs_f64());
         [rep.seconds.partition, rep.seconds.own_part] = self.partition;
@@ -470,8 +532,8 @@ impl<'c> Deformer<'c> {
             let mut solver = String::new();
             for m in 1..=inc {
                 let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
-                let o =
-                    self.increment(s, &mut cur, &mut params, coarse.as_ref(), &mut rep.seconds)?;
+                let (c, sec) = (coarse.as_ref(), &mut rep.seconds);
+                let o = self.increment(s, disp, &mut cur, &mut params, c, sec)?;
                 iterations += o.iterations;
                 rot_iterations += o.rotation_iterations;
                 residual = residual.max(o.residual);
@@ -527,11 +589,13 @@ impl<'c> Deformer<'c> {
         }
     }
 
-    /// One increment to the fraction `s` of the motion, from `cur` (local nodes, ghosts
-    /// up to date) and the sliding nodes' parameters `params`; returns what it did.
+    /// One increment to the fraction `s` of the motion (`disp`: the displaced nodes'
+    /// displacements), from `cur` (local nodes, ghosts up to date) and the sliding nodes'
+    /// parameters `params`; returns what it did.
     fn increment(
         &self,
         s: f64,
+        disp: &[[f64; 3]],
         cur: &mut [[f64; 3]],
         params: &mut [[f64; 2]],
         coarse: Option<&CoarseSpace>,
@@ -546,7 +610,7 @@ impl<'c> Deformer<'c> {
             let t = match cls.roles[i] {
                 NodeRole::Rigid(m) => cls.motions[m].apply(x0[i], s),
                 NodeRole::Displaced(k) => {
-                    let d = self.local.disp[k];
+                    let d = disp[k];
                     if s == 1.0 {
                         [x0[i][0] + d[0], x0[i][1] + d[1], x0[i][2] + d[2]]
                     } else {

@@ -26,6 +26,13 @@ pub(crate) struct Local {
     pub cls: Classified,
     /// The prescribed displacements of the local nodes that have one.
     pub disp: Vec<[f64; 3]>,
+    /// How many displacements the set-up was given: rank 0's whole-grid list for a part
+    /// made there (0 on the other ranks), the rank's own list for a given part.
+    pub n_bc: usize,
+    /// For a part made on rank 0: the index in rank 0's list of displacements of each
+    /// entry of `disp` ([`Local::displacements`] takes new values through it); empty for a
+    /// given part, whose first `n_bc` entries of `disp` are its own list, in order.
+    pub disp_src: Vec<u32>,
     /// How the parts were made: `given`, `metis`, `rcb`, or `rcb (METIS failed)`.
     pub made_by: &'static str,
     /// On rank 0, the nodes sliding on geometry supports as the serial classification
@@ -95,6 +102,8 @@ impl Local {
             part,
             cls,
             disp,
+            n_bc: bc.displacements.len(),
+            disp_src: Vec::new(),
             made_by: "given",
             root_supports: Vec::new(),
             root_boundary: Vec::new(),
@@ -119,6 +128,7 @@ impl Local {
         type Piece = (Vec<u64>, Vec<f64>);
         let mut root_supports = Vec::new();
         let mut root_boundary = Vec::new();
+        let n_bc = whole.map_or(0, |(_, bc)| bc.displacements.len());
         let mine: Result<Option<(Piece, u64)>> = if comm.rank() == 0 {
             let made = (|| {
                 let (m, bc) = whole.ok_or_else(|| Error::Distributed {
@@ -175,7 +185,7 @@ impl Local {
             reason: "no part received".into(),
         })?;
         let t = std::time::Instant::now();
-        let (grid, mut cls, disp) = agree(comm, decode(&ints, &floats))?;
+        let (grid, mut cls, disp, disp_src) = agree(comm, decode(&ints, &floats))?;
         drop((ints, floats));
         // The part's numbering is ours: its owned nodes take the serial solver's order.
         let (part, perm) = Partition::ordered(comm, grid)?;
@@ -193,12 +203,84 @@ impl Local {
             part,
             cls,
             disp,
+            n_bc: if comm.rank() == 0 { n_bc } else { 0 },
+            disp_src,
             made_by: MADE_BY.get(how as usize - 1).copied().unwrap_or("?"),
             root_supports,
             root_boundary,
             caller: None,
             own_seconds: t.elapsed().as_secs_f64(),
         })
+    }
+}
+
+impl Local {
+    /// The displacements of the local displaced nodes (as `disp`) for new values of the
+    /// set-up's prescribed displacements, in the order the set-up was given them
+    /// (collective): for a part made on rank 0, rank 0's `values` (the whole grid's list;
+    /// the other ranks' are ignored) broadcast and each entry taken from its index; for a
+    /// given part, each rank its own list, and its ghosts' from their owners. A list of
+    /// another length, or a value that is not finite, fails on every rank.
+    pub fn displacements(&self, comm: &Comm, values: &[[f64; 3]]) -> Result<Vec<[f64; 3]>> {
+        let made = self.caller.is_none();
+        let checked = if made && comm.rank() != 0 {
+            Ok(())
+        } else if values.len() != self.n_bc {
+            Err(format!(
+                "{} displacements given for the {} nodes of the set-up",
+                values.len(),
+                self.n_bc
+            ))
+        } else if let Some(k) = values.iter().position(|d| !d.iter().all(|x| x.is_finite())) {
+            Err(format!("displacement {k} ({:?}) is not finite", values[k]))
+        } else {
+            Ok(())
+        };
+        agree(
+            comm,
+            checked.map_err(|reason| Error::Distributed {
+                rank: comm.rank(),
+                reason,
+            }),
+        )?;
+        if made {
+            let flat: Vec<f64> = if comm.rank() == 0 {
+                values.iter().flatten().copied().collect()
+            } else {
+                Vec::new()
+            };
+            let all = super::comm::broadcast_vec(comm, 0, flat);
+            return Ok(self
+                .disp_src
+                .iter()
+                .map(|&s| {
+                    let s = 3 * s as usize;
+                    [all[s], all[s + 1], all[s + 2]]
+                })
+                .collect());
+        }
+        let mut disp = self.disp.clone();
+        disp[..self.n_bc].copy_from_slice(values);
+        // Every local node's displacement, the ghosts' from their owners.
+        let mut at = vec![[0.0; 3]; self.cls.roles.len()];
+        for (i, role) in self.cls.roles.iter().enumerate() {
+            if let NodeRole::Displaced(k) = *role {
+                at[i] = disp[k];
+            }
+        }
+        self.part.halo.exchange(comm, &mut at);
+        for (i, role) in self
+            .cls
+            .roles
+            .iter()
+            .enumerate()
+            .skip(self.part.grid.n_owned)
+        {
+            if let NodeRole::Displaced(k) = *role {
+                disp[k] = at[i];
+            }
+        }
+        Ok(disp)
     }
 }
 
@@ -288,17 +370,14 @@ fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> (Vec<u64>
         ints.push(grp.nodes.len() as u64);
         ints.extend(grp.nodes.iter().map(|&v| u64::from(v)));
     }
-    // Roles, with a payload of three floats each.
-    let mut disp = 0u64;
+    // Roles, with a payload of three floats each; a displaced node's index is that of its
+    // displacement in rank 0's list.
     for &gid in &g.global_ids {
         let (tag, index, pay) = match cls.roles[gid as usize] {
             NodeRole::Free | NodeRole::OnSupport(_) => (FREE, 0, [0.0; 3]),
             NodeRole::Fixed => (FIXED, 0, [0.0; 3]),
             NodeRole::Rigid(m) => (RIGID, m as u64, [0.0; 3]),
-            NodeRole::Displaced(k) => {
-                disp += 1;
-                (DISPLACED, disp - 1, bc.displacements[k].1)
-            }
+            NodeRole::Displaced(k) => (DISPLACED, k as u64, bc.displacements[k].1),
             NodeRole::Sliding(Constraint::Plane(v)) => (PLANE, 0, v),
             NodeRole::Sliding(Constraint::Line(v)) => (LINE, 0, v),
         };
@@ -337,8 +416,12 @@ fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> (Vec<u64>
     (ints, floats)
 }
 
+/// A decoded part: the grid, its nodes' roles, the displacements of its displaced nodes
+/// and the index of each in rank 0's list.
+type Decoded = (LocalGrid, Classified, Vec<[f64; 3]>, Vec<u32>);
+
 /// The inverse of [`encode`].
-fn decode(ints: &[u64], floats: &[f64]) -> Result<(LocalGrid, Classified, Vec<[f64; 3]>)> {
+fn decode(ints: &[u64], floats: &[f64]) -> Result<Decoded> {
     let bad = || Error::Distributed {
         rank: -1,
         reason: "malformed part received from rank 0".into(),
@@ -368,7 +451,7 @@ fn decode(ints: &[u64], floats: &[f64]) -> Result<(LocalGrid, Classified, Vec<[f
         }
     }
     let mut roles = Vec::with_capacity(n);
-    let mut disp = Vec::new();
+    let (mut disp, mut disp_src) = (Vec::new(), Vec::new());
     for _ in 0..n {
         let (tag, index) = (next()?, next()? as usize);
         let pay = [f.next(), f.next(), f.next()];
@@ -383,7 +466,8 @@ fn decode(ints: &[u64], floats: &[f64]) -> Result<(LocalGrid, Classified, Vec<[f
             RIGID => NodeRole::Rigid(index),
             DISPLACED => {
                 disp.push(pay);
-                NodeRole::Displaced(index)
+                disp_src.push(u32::try_from(index).map_err(|_| bad())?);
+                NodeRole::Displaced(disp.len() - 1)
             }
             PLANE => NodeRole::Sliding(Constraint::Plane(pay)),
             LINE => NodeRole::Sliding(Constraint::Line(pay)),
@@ -426,5 +510,5 @@ fn decode(ints: &[u64], floats: &[f64]) -> Result<(LocalGrid, Classified, Vec<[f
         skin,
         supports: Vec::new(),
     };
-    Ok((grid, cls, disp))
+    Ok((grid, cls, disp, disp_src))
 }
