@@ -1,15 +1,18 @@
 //! The MPI part of `cargo xtask regress` (docs/mpi.md): skipped with a message when
 //! `mpirun` is absent.
 //!
-//! 1. Builds `aeroshape` and the example `distributed` of `deform` with the feature `mpi`
-//!    (release profile).
+//! 1. Runs the unit tests of `deform::distributed` (the partitioners, the parts, the coarse
+//!    space: built only with the feature `mpi`, which `cargo test --workspace` leaves out);
+//!    builds `aeroshape` and the examples `distributed` of `deform` and
+//!    `distributed_study` of `aeroshape` with the feature `mpi` (release profile).
 //! 2. On the ~100k-node Gmsh wing-body grid (`target/grids/wing_body.su2`, made by
 //!    `fixtures/grids/make_grids.py --size 100k` when absent): the serial `aeroshape deform`
 //!    and `mpirun -n 2` and `-n 3 --oversubscribe` of the same command (the partition made
 //!    on rank 0 by METIS, which the report must name); every node of the gathered grid
 //!    within 1e-8 of the serial one, relative to the largest displacement, no cell with
 //!    q ≤ 0, and the Eq. 21 solver the constrained block multigrid (`…-held`: the symmetry
-//!    plane slides). The `.pvtu` run (-n 3) cuts by coordinate bisection (`--partition rcb`).
+//!    plane slides); rank 0 made the partition with as many threads as the ranks (on the
+//!    cores of the ranks waiting for it), up to the machine's CPUs. The `.pvtu` run (-n 3) cuts by coordinate bisection (`--partition rcb`).
 //! 3. `mpirun aeroshape run` on the default case against the serial run
 //!    (`regress_mpi_study`); sliding on geometry supports and the volume and wall-distance
 //!    stiffnesses against the serial runs (`regress_mpi_slide`).
@@ -230,6 +233,16 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
         }
     }
     crate::cargo(&[
+        "test",
+        "-q",
+        "-p",
+        "deform",
+        "--features",
+        "mpi",
+        "--lib",
+        "distributed::",
+    ])?;
+    crate::cargo(&[
         "build",
         "--release",
         "-q",
@@ -319,6 +332,16 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
             dist["partitioner"],
             dist["ghost_nodes"]
         );
+        // Rank 0 cut on a pool over the cores of the ranks of its node.
+        let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+        let threads = dist["partition_threads"].as_u64().unwrap_or(0) as usize;
+        println!("regress: mpi -n {n}: rank 0 made the partition on {threads} threads");
+        if threads < n.min(cpus) {
+            drift.push(format!(
+                "mpi: -n {n}: rank 0 made the partition on {threads} threads, not {}",
+                n.min(cpus)
+            ));
+        }
         if dist["partitioner"] != "metis" {
             drift.push(format!(
                 "mpi: -n {n}: the grid was partitioned by {}, not METIS",

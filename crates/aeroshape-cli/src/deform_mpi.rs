@@ -115,7 +115,6 @@ fn deform_on(
     t_all: Instant,
 ) -> anyhow::Result<()> {
     let opts = request.options();
-    let root = world.rank() == 0;
     let format =
         if pieces(&args.output) {
             None
@@ -137,11 +136,7 @@ fn deform_on(
         );
     }
     let geometry = geometry?;
-    let input = if root {
-        Some(read(args, &request, geometry.as_ref()))
-    } else {
-        None
-    };
+    let input = on_root(world, || read(args, &request, geometry.as_ref()));
     // Every rank reports rank 0's error, so that all print the same line.
     let input = input.transpose();
     if let Some((_, e)) = distributed::first_failure(world, &input, |e| {
@@ -170,7 +165,8 @@ fn deform_on(
         Some(format) => {
             let gathered = d.gather(&out.coords);
             let supports = d.gather_supports(&out);
-            match (input, gathered) {
+            let (quality, dist) = (out.quality, &out.report);
+            on_root(world, move || match (input, gathered) {
                 (Some((m, _, _)), Some(coords)) => {
                     let t = Instant::now();
                     let mut m = m;
@@ -182,16 +178,17 @@ fn deform_on(
                             report(
                                 args,
                                 &m,
-                                out.quality,
+                                quality,
                                 Vec::new(),
-                                &out.report,
+                                dist,
                                 [seconds_read, t.elapsed().as_secs_f64()],
                                 t_all,
                             )
                         })
                 }
                 _ => Ok(()),
-            }
+            })
+            .unwrap_or(Ok(()))
         }
         None => write_pieces(world, &d, &out.coords, args).and_then(|sources| match &input {
             Some((m, _, _)) => {
@@ -220,6 +217,21 @@ fn deform_on(
         );
     }
     Ok(())
+}
+
+/// `f` run on rank 0 on the cores of the ranks of its node (`distributed::root_pool`), the
+/// other ranks waiting for it asleep (`distributed::wait_idle`); `None` on the other ranks.
+/// Collective. At 1M nodes on 2 ranks the read took 0.36–0.41 s so against 0.52–0.54 s on
+/// rank 0's one core (docs/perf-log/2026-12-04-mpi-root-pool.md).
+fn on_root<T: Send>(world: &distributed::Comm, f: impl FnOnce() -> T + Send) -> Option<T> {
+    let pool = distributed::root_pool(world);
+    let out = (world.rank() == 0).then(|| match &pool {
+        Some(p) => p.install(f),
+        None => f(),
+    });
+    drop(pool);
+    distributed::wait_idle(world);
+    out
 }
 
 /// Puts the sliding nodes' new parameters into the grid's classification, as the serial

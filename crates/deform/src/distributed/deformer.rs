@@ -46,6 +46,9 @@ pub struct DistReport {
     /// How the parts were made: `given` (by the caller), `metis`, `rcb`, or
     /// `rcb (METIS failed)` (on rank 0).
     pub partitioner: String,
+    /// The threads rank 0 made the parts with: its pool on the cores of the ranks of its
+    /// node (`root_pool`), or its own threads; 0 for a given partition.
+    pub partition_threads: usize,
     /// Increments of the last attempt and the increment counts tried.
     pub increments: usize,
     /// The increment counts tried.
@@ -166,6 +169,8 @@ pub struct Deformer<'c> {
     /// Seconds of the set-up until the partition was in place, and of it each rank's own
     /// work on its part (largest over the ranks).
     partition: [f64; 2],
+    /// Rank 0's threads for the partition (the same on every rank).
+    partition_threads: usize,
     /// The springs' scale of the whole grid (a rank's own grid would give its rows another
     /// power of two than its neighbours' and the matrix over the ranks would not be
     /// symmetric).
@@ -363,6 +368,7 @@ impl<'c> Deformer<'c> {
             sup_unk: Vec::new(),
         };
         let setup = max(comm, t.elapsed().as_secs_f64());
+        let partition_threads = max(comm, local.partition_threads as f64) as usize;
         Ok(Self {
             comm,
             local,
@@ -372,6 +378,7 @@ impl<'c> Deformer<'c> {
             unk_halo,
             setup,
             partition,
+            partition_threads,
             scale: length_scale(diag, opts.stiffness),
             coarse_parts: COARSE_PARTS,
             overlap: true,
@@ -422,6 +429,11 @@ impl<'c> Deformer<'c> {
             self.unk_node.len(),
             self.coarse_parts,
         ))
+    }
+
+    /// The deformations run on this set-up so far.
+    pub fn deformations(&self) -> usize {
+        self.runs.get()
     }
 
     /// This rank's partition, in the deformer's own numbering: a part given by the caller
@@ -507,6 +519,7 @@ impl<'c> Deformer<'c> {
             unknowns: sum_u64(comm, self.sys.node_of.len() as u64),
             ghost_nodes: sum_u64(comm, (x0.len() - part.grid.n_owned) as u64),
             partitioner: self.local.made_by.to_string(),
+            partition_threads: self.partition_threads,
             bytes_per_iteration: sum_u64(comm, self.unk_halo.bytes_sent(3) as u64),
             deformations: self.runs.get(),
             ..DistReport::default()

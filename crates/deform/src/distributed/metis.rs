@@ -10,6 +10,7 @@
 //! depend on the thread count.
 
 use mesh::{Adjacency, Mesh};
+use rayon::prelude::*;
 use sparse::order;
 
 use super::rcb::rcb;
@@ -126,14 +127,15 @@ pub(crate) fn metis_in(
         let nn = g.kind.n_nodes();
         let mut by_node: Vec<(u32, u32)> = g
             .nodes
-            .chunks_exact(nn)
+            .par_chunks_exact(nn)
             .enumerate()
             .map(|(c, e)| {
                 let lo = e.iter().map(|&v| perm[v as usize]).min();
                 (lo.unwrap_or(0), c as u32)
             })
             .collect();
-        by_node.sort_unstable();
+        // The keys are distinct: the parallel sort gives the serial order.
+        by_node.par_sort_unstable();
         let mut e = Vec::with_capacity(nn);
         for (_, c) in by_node {
             let c = c as usize;
@@ -168,6 +170,11 @@ pub(crate) fn metis_in(
         .map_err(|_| wide())?;
     let nparts = metis::Idx::try_from(parts).map_err(|_| format!("{parts} parts"))?;
     let mut part: Vec<metis::Idx> = vec![0; n];
+    // METIS draws from the C library's global random state: two calls at once (two threads
+    // of a caller, or of the test harness) would interleave their draws and cut otherwise
+    // than alone. One call at a time keeps every cut reproducible.
+    static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     metis::Graph::new(1, nparts, &xadj, &adjncy)
         .map_err(|e| format!("METIS refused the node graph: {e}"))?
         .part_kway(&mut part)
@@ -221,6 +228,20 @@ mod tests {
             // The same partition again (METIS's seed is fixed).
             assert_eq!(metis(&m, parts).unwrap(), p);
         }
+    }
+
+    #[test]
+    fn metis_does_not_depend_on_the_threads() {
+        // More cells than one chunk of the parallel sort's work.
+        let m = mesh::generate::box_tets(20, 20, 20, [0.0; 3], [2.0, 1.0, 1.0]);
+        let on = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| metis(&m, 3).unwrap())
+        };
+        assert_eq!(on(1), on(3));
     }
 
     #[test]

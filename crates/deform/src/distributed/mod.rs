@@ -20,9 +20,13 @@
 //!   mean cell volume, the distance from the moving boundary along grid edges).
 //! - [`deformer`]: [`Deformer`] (takes a communicator), the increments and the quality
 //!   guard with all-reduced counts, the gather on rank 0.
+//! - `cores`: rank 0's thread pool on the cores of the ranks of its node ([`root_pool`]),
+//!   for its serial part of a partition made there, while the others wait asleep
+//!   ([`wait_idle`]).
 
 mod coarse;
 mod comm;
+mod cores;
 pub mod deformer;
 mod halo;
 pub mod metis;
@@ -36,6 +40,7 @@ mod solve;
 mod wall;
 
 pub use comm::{Comm, first_failure};
+pub use cores::{root_pool, wait_idle};
 pub use deformer::{COARSE_PARTS, Deformer, DistDeformed, DistReport, DistSeconds, OnSupports};
 pub use metis::{Cut, Partitioner};
 /// The MPI bindings (rsmpi) the distributed deformation is built on, for the caller's

@@ -8,6 +8,7 @@
 //! ranks (docs/perf-log/2026-12-03-mpi-metis.md).
 
 use mesh::{Elements, Marker, Mesh};
+use rayon::prelude::*;
 
 use super::partition::LocalGrid;
 
@@ -71,90 +72,116 @@ pub(crate) fn parts_in(mesh: &Mesh, part: &[u32], parts: usize, order: &[u32]) -
     for (k, &i) in order.iter().enumerate() {
         rank_of[i as usize] = k as u32;
     }
-    // The cells of each part, by kind (cell indices within the group).
-    let mut cells: Vec<Vec<Vec<usize>>> = vec![vec![Vec::new(); mesh.cells.groups().len()]; parts];
-    for (gk, g) in mesh.cells.groups().iter().enumerate() {
-        for (c, e) in g.iter().enumerate() {
-            let mut seen = [u32::MAX; 8];
-            for (k, &v) in e.iter().enumerate() {
-                let q = part[v as usize];
-                if !seen[..k.min(8)].contains(&q) {
-                    cells[q as usize][gk].push(c);
-                }
-                if k < 8 {
-                    seen[k] = q;
-                }
-            }
-        }
-    }
-    let mut local = vec![u32::MAX; n];
+    let cells = cells_of_parts(mesh, part, parts);
+    // Each part on its own thread, with its own scratch numbering.
     (0..parts)
-        .map(|q| {
-            let mut gids: Vec<u64> = order
-                .iter()
-                .filter(|&&i| part[i as usize] == q as u32)
-                .map(|&i| u64::from(i))
-                .collect();
-            let n_owned = gids.len();
-            let mut ghosts = Vec::new();
-            for (gk, g) in mesh.cells.groups().iter().enumerate() {
-                for &c in &cells[q][gk] {
-                    for &v in g.element(c) {
-                        if part[v as usize] != q as u32 {
-                            ghosts.push(v as u64);
+        .into_par_iter()
+        .map_init(
+            || vec![u32::MAX; n],
+            |local, q| {
+                let mut gids: Vec<u64> = order
+                    .iter()
+                    .filter(|&&i| part[i as usize] == q as u32)
+                    .map(|&i| u64::from(i))
+                    .collect();
+                let n_owned = gids.len();
+                let mut ghosts = Vec::new();
+                for (gk, g) in mesh.cells.groups().iter().enumerate() {
+                    for &c in &cells[q][gk] {
+                        for &v in g.element(c) {
+                            if part[v as usize] != q as u32 {
+                                ghosts.push(v as u64);
+                            }
                         }
                     }
                 }
-            }
-            ghosts.sort_unstable_by_key(|&g| rank_of[g as usize]);
-            ghosts.dedup();
-            gids.extend(ghosts);
-            for (k, &g) in gids.iter().enumerate() {
-                local[g as usize] = k as u32;
-            }
-            let mut m = Mesh::new(mesh.dim);
-            m.coords = gids.iter().map(|&g| mesh.coords[g as usize]).collect();
-            let mut e = Vec::with_capacity(8);
-            for (gk, g) in mesh.cells.groups().iter().enumerate() {
-                // By their smallest local node: a node's cells then lie close in memory.
-                let mut by_node: Vec<(u32, u32)> = cells[q][gk]
-                    .iter()
-                    .map(|&c| {
-                        let lo = g.element(c).iter().map(|&v| local[v as usize]).min();
-                        (lo.unwrap_or(0), c as u32)
-                    })
-                    .collect();
-                by_node.sort_unstable();
-                for c in by_node.into_iter().map(|(_, c)| c as usize) {
-                    e.clear();
-                    e.extend(g.element(c).iter().map(|&v| local[v as usize]));
-                    m.cells.push(g.kind, &e, None);
+                ghosts.sort_unstable_by_key(|&g| rank_of[g as usize]);
+                ghosts.dedup();
+                gids.extend(ghosts);
+                for (k, &g) in gids.iter().enumerate() {
+                    local[g as usize] = k as u32;
                 }
-            }
-            for mk in &mesh.markers {
-                let mut el = Elements::new();
-                for (kind, e) in mk.elements.iter() {
-                    if e.iter().all(|&v| local[v as usize] != u32::MAX) {
-                        let e: Vec<u32> = e.iter().map(|&v| local[v as usize]).collect();
-                        el.push(kind, &e, None);
+                let mut m = Mesh::new(mesh.dim);
+                m.coords = gids.iter().map(|&g| mesh.coords[g as usize]).collect();
+                let mut e = Vec::with_capacity(8);
+                for (gk, g) in mesh.cells.groups().iter().enumerate() {
+                    // By their smallest local node: a node's cells then lie close in memory.
+                    let mut by_node: Vec<(u32, u32)> = cells[q][gk]
+                        .iter()
+                        .map(|&c| {
+                            let lo = g.element(c).iter().map(|&v| local[v as usize]).min();
+                            (lo.unwrap_or(0), c as u32)
+                        })
+                        .collect();
+                    by_node.sort_unstable();
+                    for c in by_node.into_iter().map(|(_, c)| c as usize) {
+                        e.clear();
+                        e.extend(g.element(c).iter().map(|&v| local[v as usize]));
+                        m.cells.push(g.kind, &e, None);
                     }
                 }
-                m.markers.push(Marker {
-                    name: mk.name.clone(),
-                    tag: mk.tag,
-                    elements: el,
-                });
-            }
-            for &g in &gids {
-                local[g as usize] = u32::MAX;
-            }
-            LocalGrid {
-                mesh: m,
-                global_ids: gids,
-                n_owned,
-            }
-        })
+                for mk in &mesh.markers {
+                    let mut el = Elements::new();
+                    for (kind, e) in mk.elements.iter() {
+                        if e.iter().all(|&v| local[v as usize] != u32::MAX) {
+                            let e: Vec<u32> = e.iter().map(|&v| local[v as usize]).collect();
+                            el.push(kind, &e, None);
+                        }
+                    }
+                    m.markers.push(Marker {
+                        name: mk.name.clone(),
+                        tag: mk.tag,
+                        elements: el,
+                    });
+                }
+                for &g in &gids {
+                    local[g as usize] = u32::MAX;
+                }
+                LocalGrid {
+                    mesh: m,
+                    global_ids: gids,
+                    n_owned,
+                }
+            },
+        )
         .collect()
+}
+
+/// The cells of each part (those with a node it owns), by group (cell indices within the
+/// group, increasing): chunks of cells on parallel threads, joined in order.
+fn cells_of_parts(mesh: &Mesh, part: &[u32], parts: usize) -> Vec<Vec<Vec<usize>>> {
+    const CHUNK: usize = 1 << 15;
+    let groups = mesh.cells.groups();
+    let mut cells: Vec<Vec<Vec<usize>>> = vec![vec![Vec::new(); groups.len()]; parts];
+    for (gk, g) in groups.iter().enumerate() {
+        let n = g.len();
+        let chunks: Vec<Vec<Vec<usize>>> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|ch| {
+                let mut mine = vec![Vec::new(); parts];
+                for c in ch * CHUNK..(n.min((ch + 1) * CHUNK)) {
+                    let e = g.element(c);
+                    let mut seen = [u32::MAX; 8];
+                    for (k, &v) in e.iter().enumerate() {
+                        let q = part[v as usize];
+                        if !seen[..k.min(8)].contains(&q) {
+                            mine[q as usize].push(c);
+                        }
+                        if k < 8 {
+                            seen[k] = q;
+                        }
+                    }
+                }
+                mine
+            })
+            .collect();
+        for mine in chunks {
+            for (q, c) in mine.into_iter().enumerate() {
+                cells[q][gk].extend(c);
+            }
+        }
+    }
+    cells
 }
 
 #[cfg(test)]
@@ -185,6 +212,57 @@ mod tests {
             let cells: usize = m.tets().len();
             let on_parts: usize = grids.iter().map(|g| g.mesh.tets().len()).sum();
             assert!(on_parts >= cells);
+        }
+    }
+
+    /// The cells of a grid as sorted lists of global nodes.
+    fn global_cells(g: &LocalGrid) -> Vec<Vec<u64>> {
+        let mut cells: Vec<Vec<u64>> = g
+            .mesh
+            .cells
+            .iter()
+            .map(|(_, e)| {
+                let mut c: Vec<u64> = e.iter().map(|&v| g.global_ids[v as usize]).collect();
+                c.sort_unstable();
+                c
+            })
+            .collect();
+        cells.sort_unstable();
+        cells
+    }
+
+    #[test]
+    fn parts_hold_exactly_their_cells_and_do_not_depend_on_the_threads() {
+        // 48 000 tetrahedra: more than one chunk of `cells_of_parts`.
+        let m = mesh::generate::box_tets(20, 20, 20, [0.0; 3], [2.0, 1.0, 1.0]);
+        assert!(m.cells.len() > 1 << 15);
+        let parts = 3;
+        let p = rcb(&m.coords, parts);
+        let on = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| super::parts(&m, &p, parts))
+        };
+        let (one, three) = (on(1), on(3));
+        for (q, (a, b)) in one.iter().zip(&three).enumerate() {
+            assert_eq!(a.global_ids, b.global_ids, "part {q}");
+            assert_eq!(a.mesh.coords, b.mesh.coords, "part {q}");
+            assert_eq!(a.mesh.cells, b.mesh.cells, "part {q}");
+            // Exactly the whole grid's cells with a node the part owns.
+            let mut want: Vec<Vec<u64>> = m
+                .cells
+                .iter()
+                .filter(|(_, e)| e.iter().any(|&v| p[v as usize] == q as u32))
+                .map(|(_, e)| {
+                    let mut c: Vec<u64> = e.iter().map(|&v| u64::from(v)).collect();
+                    c.sort_unstable();
+                    c
+                })
+                .collect();
+            want.sort_unstable();
+            assert_eq!(global_cells(a), want, "part {q}");
         }
     }
 }

@@ -7,9 +7,11 @@
 
 use mesh::{ElementKind, Mesh};
 use mpi::traits::*;
+use rayon::prelude::*;
 use sparse::order;
 
 use super::comm::{Comm, agree};
+use super::cores::{broadcast_idle, on_pool, root_pool};
 use super::metis::{Partitioner, cut_in};
 use super::partition::{LocalGrid, Partition};
 use super::rcb::parts_in;
@@ -35,6 +37,8 @@ pub(crate) struct Local {
     pub disp_src: Vec<u32>,
     /// How the parts were made: `given`, `metis`, `rcb`, or `rcb (METIS failed)`.
     pub made_by: &'static str,
+    /// The threads rank 0 made the parts with (on rank 0; 0 elsewhere and for a given part).
+    pub partition_threads: usize,
     /// On rank 0, the nodes sliding on geometry supports as the serial classification
     /// finds them (whole-grid numbering); empty elsewhere. Their roles are sent as free:
     /// `super::slide` hands each owner its own.
@@ -105,6 +109,7 @@ impl Local {
             n_bc: bc.displacements.len(),
             disp_src: Vec::new(),
             made_by: "given",
+            partition_threads: 0,
             root_supports: Vec::new(),
             root_boundary: Vec::new(),
             caller: Some(perm),
@@ -129,8 +134,15 @@ impl Local {
         let mut root_supports = Vec::new();
         let mut root_boundary = Vec::new();
         let n_bc = whole.map_or(0, |(_, bc)| bc.displacements.len());
+        // Rank 0 cuts on the cores of the ranks waiting for it.
+        let pool = root_pool(comm);
+        let partition_threads = match (&pool, comm.rank()) {
+            (_, r) if r != 0 => 0,
+            (Some(p), _) => p.current_num_threads(),
+            (None, _) => rayon::current_num_threads(),
+        };
         let mine: Result<Option<(Piece, u64)>> = if comm.rank() == 0 {
-            let made = (|| {
+            let made = on_pool(pool.as_ref(), || {
                 let (m, bc) = whole.ok_or_else(|| Error::Distributed {
                     rank: 0,
                     reason: "rank 0 was given no grid".into(),
@@ -145,14 +157,15 @@ impl Local {
                 let morton = order::morton_order(&m.coords);
                 let c = cut_in(m, p, by, &morton);
                 let grids = parts_in(m, &c.part, p, &order::inverse(&morton));
-                let pieces: Vec<Piece> = grids.iter().map(|g| encode(g, &cls, bc)).collect();
+                let pieces: Vec<Piece> = grids.par_iter().map(|g| encode(g, &cls, bc)).collect();
                 let how: u64 = match (c.by, c.fallback) {
                     (Partitioner::Metis, _) => 1,
                     (Partitioner::Rcb, None) => 2,
                     (Partitioner::Rcb, Some(_)) => 3,
                 };
                 Ok((pieces, how))
-            })();
+            });
+            drop(pool);
             // The others wait for their part only when rank 0 has made them.
             let mut ok = made.as_ref().map_or(0, |m| m.1);
             broadcast_idle(comm, &mut ok);
@@ -205,6 +218,7 @@ impl Local {
             disp,
             n_bc: if comm.rank() == 0 { n_bc } else { 0 },
             disp_src,
+            partition_threads,
             made_by: MADE_BY.get(how as usize - 1).copied().unwrap_or("?"),
             root_supports,
             root_boundary,
@@ -282,26 +296,6 @@ impl Local {
         }
         Ok(disp)
     }
-}
-
-/// Broadcasts `v` from rank 0, the other ranks waiting for it without keeping a core busy
-/// (a blocking broadcast polls: while rank 0 cuts and encodes the grid, for seconds, the
-/// waiting ranks would take the CPU time rank 0 needs on a shared or oversubscribed
-/// machine). Collective.
-fn broadcast_idle(comm: &Comm, v: &mut u64) {
-    let root = comm.process_at_rank(0);
-    mpi::request::scope(|sc| {
-        let mut req = root.immediate_broadcast_into(sc, v);
-        loop {
-            match req.test() {
-                Ok(_) => break,
-                Err(r) => {
-                    req = r;
-                    std::thread::sleep(std::time::Duration::from_millis(2));
-                }
-            }
-        }
-    });
 }
 
 const FREE: u64 = 0;
