@@ -73,7 +73,10 @@ where
 
 /// The `displacements` argument: `(nodes, d)` or `{node: (dx, dy, dz)}`; checked as the
 /// command line checks its CSV file (nodes exist, given once, finite values).
-fn displacements(obj: &Bound<'_, PyAny>, n_nodes: usize) -> PyResult<Vec<(u32, [f64; 3])>> {
+pub(crate) fn displacements(
+    obj: &Bound<'_, PyAny>,
+    n_nodes: usize,
+) -> PyResult<Vec<(u32, [f64; 3])>> {
     let pairs: Vec<(i64, [f64; 3])> = if let Ok(d) = obj.cast::<PyDict>() {
         d.iter()
             .map(|(k, v)| -> PyResult<(i64, [f64; 3])> {
@@ -234,6 +237,7 @@ pub fn deform_mesh(
 }
 
 /// The rigid motion keywords of `deform`.
+#[derive(Clone)]
 pub(crate) struct Motion {
     pub rigid: Vec<String>,
     pub rotate_deg: f64,

@@ -24,6 +24,7 @@ use ::deform::distributed::{self, Comm, Deformer, LocalGrid, Partitioner, all_ok
 use mpi::topology::{Communicator, Group, SimpleCommunicator};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use self_cell::self_cell;
 
 use crate::arrays;
 use crate::deformation::{Motion, request};
@@ -140,6 +141,179 @@ fn whole_grid(obj: &Bound<'_, PyAny>) -> PyResult<mesh::Mesh> {
         .map_err(|e| errors::raise(obj.py(), Kind::Mesh, errors::one_line(&e)))
 }
 
+/// The keywords of `aeroshape.distributed.deform` and `Deformer` but the communicator and
+/// the grid.
+struct Keywords<'py> {
+    motion: Motion,
+    displacements: Option<Bound<'py, PyAny>>,
+    slide: Vec<String>,
+    fixed: Vec<String>,
+    solver: String,
+    stiffness: String,
+    no_rotation: bool,
+    tolerance: f64,
+    allow_inverted: bool,
+    partition: String,
+}
+
+/// What a rank's arguments give: its way in, the options, the partitioner and, for the
+/// kept deformer, the set-up's prescribed nodes and displacements with the number of them
+/// the caller gave (rank 0's whole-grid list on a made partition, a rank's own on a given
+/// one; the held nodes of `hold_fixed_nodes` after the caller's).
+struct Read {
+    input: Input,
+    opts: ::deform::DeformOptions,
+    by: Partitioner,
+    prescribed: Vec<(u32, [f64; 3])>,
+    given: usize,
+    n_nodes: usize,
+}
+
+/// Reads this rank's arguments (see [`deform_distributed`]).
+fn read(
+    root: bool,
+    mesh: Option<&Bound<'_, PyAny>>,
+    global_ids: Option<&Bound<'_, PyAny>>,
+    n_owned: Option<usize>,
+    k: Keywords<'_>,
+) -> PyResult<Read> {
+    let by: Partitioner = k
+        .partition
+        .parse()
+        .map_err(|e| PyValueError::new_err(format!("partition: {e}")))?;
+    let keywords = |n_nodes: usize| {
+        request(
+            n_nodes,
+            k.motion.clone(),
+            k.displacements.as_ref(),
+            k.slide.clone(),
+            k.fixed.clone(),
+            [&k.solver, &k.stiffness],
+            k.no_rotation,
+            k.tolerance,
+            k.allow_inverted,
+        )
+    };
+    if let Some(ids) = global_ids {
+        let m = mesh
+            .and_then(|m| m.cast::<PyMesh>().ok())
+            .ok_or_else(|| PyValueError::new_err("mesh: a given part is a Mesh on every rank"))?
+            .borrow()
+            .inner
+            .clone();
+        let ids = arrays::read_ids(ids, "global_ids")?;
+        let n_owned = n_owned.ok_or_else(|| {
+            PyValueError::new_err("n_owned: a given part needs its number of owned nodes")
+        })?;
+        let req = keywords(m.n_nodes())?;
+        let bc = req.boundary_conditions(&m, None);
+        let (given, n_nodes) = (bc.displacements.len(), m.n_nodes());
+        let grid = LocalGrid {
+            mesh: m,
+            global_ids: ids,
+            n_owned,
+        };
+        Ok(Read {
+            prescribed: bc.displacements.clone(),
+            input: Input::Given(grid, bc),
+            opts: req.options(),
+            by,
+            given,
+            n_nodes,
+        })
+    } else if root {
+        let m = whole_grid(mesh.ok_or_else(|| {
+            PyValueError::new_err("mesh: rank 0 needs the grid (a Mesh or a grid file)")
+        })?)?;
+        let mut req = keywords(m.n_nodes())?;
+        let given = req.displacements.len();
+        // as `aeroshape deform`: a fixed marker's node never moves where it meets a
+        // sliding one
+        aeroshape::precedence::hold_fixed_nodes(&m, &mut req);
+        let bc = req.boundary_conditions(&m, None);
+        Ok(Read {
+            prescribed: bc.displacements.clone(),
+            n_nodes: m.n_nodes(),
+            input: Input::Root(Some((m, bc))),
+            opts: req.options(),
+            by,
+            given,
+        })
+    } else {
+        // Displacements name nodes of rank 0's grid: only rank 0 checks them.
+        let req = keywords(usize::MAX)?;
+        Ok(Read {
+            input: Input::Root(None),
+            opts: req.options(),
+            by,
+            prescribed: Vec::new(),
+            given: 0,
+            n_nodes: 0,
+        })
+    }
+}
+
+/// The set-up on `comm` of what the ranks read (collective).
+fn set_up<'c>(comm: &'c Comm, read: &Read, coarse_parts: usize) -> Result<Deformer<'c>, String> {
+    match &read.input {
+        Input::Root(whole) => Deformer::from_root_with(
+            comm,
+            whole.as_ref().map(|(m, bc)| (m, bc)),
+            &read.opts,
+            read.by,
+        ),
+        Input::Given(grid, bc) => Deformer::new(comm, grid.clone(), bc, &read.opts),
+    }
+    .map(|d| d.coarse_parts(coarse_parts))
+    .map_err(|e| errors::one_line(&e))
+}
+
+/// A deformation's outcome with the whole grid gathered on rank 0 (collective).
+fn done(d: &Deformer<'_>, out: distributed::DistDeformed) -> Outcome {
+    Outcome::Done {
+        whole: d.gather(&out.coords),
+        ids: d.local_ids(),
+        n_owned: d.partition().grid().n_owned,
+        out: Box::new(out),
+    }
+}
+
+/// The error of a rank whose arguments some rank refused: its own, or why it refused none.
+fn refusal(py: Python<'_>, own: Option<PyErr>, same_way: bool) -> PyErr {
+    match own {
+        Some(e) => e,
+        None if !same_way => PyValueError::new_err(
+            "global_ids: given on some ranks and not on others (a given part needs them on \
+             every rank, the grid on rank 0 none)",
+        ),
+        None => errors::raise(py, Kind::Deform, "another rank refused its arguments"),
+    }
+}
+
+/// The Python result of a deformation outcome.
+fn result(py: Python<'_>, outcome: Outcome) -> PyResult<PyDistributedDeformation> {
+    let Outcome::Done {
+        out,
+        whole,
+        ids,
+        n_owned,
+    } = outcome
+    else {
+        return Err(errors::raise(
+            py,
+            Kind::Deform,
+            "another rank refused its arguments",
+        ));
+    };
+    Ok(PyDistributedDeformation {
+        coordinates: whole.map(|x| arrays::coords(py, &x).into_any().unbind()),
+        local_coordinates: arrays::coords(py, &out.coords).into_any().unbind(),
+        global_ids: arrays::ids(py, &ids)?.into_any().unbind(),
+        n_owned,
+        report: arrays::to_python(py, &out.report)?.unbind(),
+    })
+}
+
 /// Runs the distributed deformation on the communicator of `world_ranks` (see the module
 /// doc); called by `aeroshape.distributed.deform`, which documents the keywords.
 #[pyfunction]
@@ -173,70 +347,33 @@ pub fn deform_distributed(
     partition: &str,
     coarse_parts: usize,
 ) -> PyResult<PyDistributedDeformation> {
-    let root = rank == 0;
     let given = global_ids.is_some();
-    // Every rank reads its own arguments; the ranks agree on the outcome before any exchange.
-    let read = (|| -> PyResult<(Input, ::deform::DeformOptions, Partitioner)> {
-        let by: Partitioner = partition
-            .parse()
-            .map_err(|e| PyValueError::new_err(format!("partition: {e}")))?;
-        let motion = Motion {
+    let keywords = Keywords {
+        motion: Motion {
             rigid,
             rotate_deg,
             axis_point,
             axis_dir,
             translate,
-        };
-        let keywords = |n_nodes: usize, motion: Motion| {
-            request(
-                n_nodes,
-                motion,
-                displacements.as_ref(),
-                slide.clone(),
-                fixed.clone(),
-                [solver, stiffness],
-                no_rotation,
-                tolerance,
-                allow_inverted,
-            )
-        };
-        if let Some(ids) = &global_ids {
-            let m = mesh
-                .as_ref()
-                .and_then(|m| m.cast::<PyMesh>().ok())
-                .ok_or_else(|| PyValueError::new_err("mesh: a given part is a Mesh on every rank"))?
-                .borrow()
-                .inner
-                .clone();
-            let ids = arrays::read_ids(ids, "global_ids")?;
-            let n_owned = n_owned.ok_or_else(|| {
-                PyValueError::new_err("n_owned: a given part needs its number of owned nodes")
-            })?;
-            let req = keywords(m.n_nodes(), motion)?;
-            let bc = req.boundary_conditions(&m, None);
-            let grid = LocalGrid {
-                mesh: m,
-                global_ids: ids,
-                n_owned,
-            };
-            Ok((Input::Given(grid, bc), req.options(), by))
-        } else if root {
-            let m = whole_grid(mesh.as_ref().ok_or_else(|| {
-                PyValueError::new_err("mesh: rank 0 needs the grid (a Mesh or a grid file)")
-            })?)?;
-            let mut req = keywords(m.n_nodes(), motion)?;
-            // as `aeroshape deform`: a fixed marker's node never moves where it meets a
-            // sliding one
-            aeroshape::precedence::hold_fixed_nodes(&m, &mut req);
-            let bc = req.boundary_conditions(&m, None);
-            Ok((Input::Root(Some((m, bc))), req.options(), by))
-        } else {
-            // Displacements name nodes of rank 0's grid: only rank 0 checks them.
-            let req = keywords(usize::MAX, motion)?;
-            Ok((Input::Root(None), req.options(), by))
-        }
-    })();
-    let (input, refused) = match read {
+        },
+        displacements,
+        slide,
+        fixed,
+        solver: solver.into(),
+        stiffness: stiffness.into(),
+        no_rotation,
+        tolerance,
+        allow_inverted,
+        partition: partition.into(),
+    };
+    // Every rank reads its own arguments; the ranks agree on the outcome before any exchange.
+    let (read, refused) = match read(
+        rank == 0,
+        mesh.as_ref(),
+        global_ids.as_ref(),
+        n_owned,
+        keywords,
+    ) {
         Ok(v) => (Some(v), None),
         Err(e) => (None, Some(e)),
     };
@@ -246,51 +383,202 @@ pub fn deform_distributed(
         // The ranks agree on the way in (a part on every rank, or none), then on the
         // arguments.
         let same_way = all_ok(&comm, given) || all_ok(&comm, !given);
-        let ok = all_ok(&comm, same_way && input.is_some());
-        let Some((input, opts, by)) = input.filter(|_| ok) else {
+        let ok = all_ok(&comm, same_way && read.is_some());
+        let Some(read) = read.filter(|_| ok) else {
             return Ok(Outcome::Refused { same_way });
         };
-        let d = match &input {
-            Input::Root(whole) => {
-                Deformer::from_root_with(&comm, whole.as_ref().map(|(m, bc)| (m, bc)), &opts, by)
-            }
-            Input::Given(grid, bc) => Deformer::new(&comm, grid.clone(), bc, &opts),
-        }
-        .map_err(|e| errors::one_line(&e))?
-        .coarse_parts(coarse_parts);
+        let d = set_up(&comm, &read, coarse_parts)?;
         let out = d.deform().map_err(|e| errors::one_line(&e))?;
-        let whole = d.gather(&out.coords);
-        Ok(Outcome::Done {
-            ids: d.local_ids(),
-            n_owned: d.partition().grid().n_owned,
-            whole,
-            out: Box::new(out),
-        })
+        Ok(done(&d, out))
     });
-    let (out, whole, ids, n_owned) = match outcome {
-        Ok(Outcome::Done {
-            out,
-            whole,
-            ids,
-            n_owned,
-        }) => (out, whole, ids, n_owned),
-        Ok(Outcome::Refused { same_way }) => {
-            return Err(match refused {
-                Some(e) => e,
-                None if !same_way => PyValueError::new_err(
-                    "global_ids: given on some ranks and not on others (a given part needs \
-                     them on every rank, the grid on rank 0 none)",
-                ),
-                None => errors::raise(py, Kind::Deform, "another rank refused its arguments"),
-            });
+    match outcome {
+        Ok(Outcome::Refused { same_way }) => Err(refusal(py, refused, same_way)),
+        Ok(o) => result(py, o),
+        Err(e) => Err(errors::raise(py, Kind::Deform, e)),
+    }
+}
+
+self_cell!(
+    /// A communicator and the deformation set up on it.
+    struct Kept {
+        owner: Comm,
+        #[covariant]
+        dependent: Deformer,
+    }
+);
+
+/// A distributed deformation set up once and deformed for new displacements as often as
+/// asked (`aeroshape.distributed.Deformer`): the partition, the nodes' roles, the unknowns,
+/// their halos and the coarse space are kept (`deform::distributed::Deformer::deform_with`).
+///
+/// It holds its communicator (made from the world ranks as for `deform`) and runs its MPI
+/// calls with the GIL held (the communicator is tied to the thread that made it: the class
+/// is `unsendable`). Dropped after MPI was finalised (an object alive at the interpreter's
+/// exit, after mpi4py's own exit handler), it leaves the communicator unfreed rather than
+/// call MPI then.
+#[pyclass(unsendable, module = "aeroshape._native", name = "DistributedDeformer")]
+pub struct PyDistributedDeformer {
+    /// Always `Some` until dropped.
+    kept: Option<Kept>,
+    /// The set-up's prescribed nodes and displacements (see [`Read`]).
+    prescribed: Vec<(u32, [f64; 3])>,
+    /// How many of them the caller gave (the first ones).
+    given: usize,
+    /// Nodes of this rank's grid (rank 0's whole grid, or a given part; 0 elsewhere).
+    n_nodes: usize,
+    /// The grid came whole on rank 0 and this is not rank 0: displacements are ignored.
+    ignored: bool,
+}
+
+impl Drop for PyDistributedDeformer {
+    fn drop(&mut self) {
+        if mpi::environment::is_finalized() {
+            std::mem::forget(self.kept.take());
         }
-        Err(e) => return Err(errors::raise(py, Kind::Deform, e)),
-    };
-    Ok(PyDistributedDeformation {
-        coordinates: whole.map(|x| arrays::coords(py, &x).into_any().unbind()),
-        local_coordinates: arrays::coords(py, &out.coords).into_any().unbind(),
-        global_ids: arrays::ids(py, &ids)?.into_any().unbind(),
-        n_owned,
-        report: arrays::to_python(py, &out.report)?.unbind(),
-    })
+    }
+}
+
+/// The list of the set-up's displacements with the caller's new ones in place, from
+/// `obj` (the `displacements` argument): the same nodes as the caller gave the set-up.
+fn new_values(d: &PyDistributedDeformer, obj: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 3]>> {
+    let new = crate::deformation::displacements(obj, d.n_nodes)?;
+    if new.len() != d.given {
+        return Err(PyValueError::new_err(format!(
+            "displacements: {} nodes, the set-up was given {} (the same nodes are needed)",
+            new.len(),
+            d.given
+        )));
+    }
+    let at: std::collections::HashMap<u32, [f64; 3]> = new.into_iter().collect();
+    d.prescribed
+        .iter()
+        .enumerate()
+        .map(|(k, &(v, d0))| match at.get(&v) {
+            Some(&x) => Ok(x),
+            None if k >= d.given => Ok(d0),
+            None => Err(PyValueError::new_err(format!(
+                "displacements: node {v} of the set-up is not given (the same nodes are needed)"
+            ))),
+        })
+        .collect()
+}
+
+#[pymethods]
+impl PyDistributedDeformer {
+    /// Sets up the distributed deformation on the communicator of `world_ranks` (collective);
+    /// called by `aeroshape.distributed.Deformer`, which documents the keywords.
+    #[new]
+    #[pyo3(signature = (
+        world_ranks, rank, mesh, global_ids=None, n_owned=None, *, rigid=Vec::new(),
+        rotate_deg=0.0, axis_point=[0.0, 0.0, 0.0], axis_dir=[0.0, 0.0, 1.0],
+        translate=[0.0, 0.0, 0.0], displacements=None, slide=Vec::new(), fixed=Vec::new(),
+        solver="pcg", stiffness="inverse-length2", no_rotation=false, tolerance=1e-8,
+        allow_inverted=false, partition="metis", coarse_parts=distributed::COARSE_PARTS
+    ))]
+    fn new(
+        py: Python<'_>,
+        world_ranks: Vec<i32>,
+        rank: i32,
+        mesh: Option<Bound<'_, PyAny>>,
+        global_ids: Option<Bound<'_, PyAny>>,
+        n_owned: Option<usize>,
+        rigid: Vec<String>,
+        rotate_deg: f64,
+        axis_point: [f64; 3],
+        axis_dir: [f64; 3],
+        translate: [f64; 3],
+        displacements: Option<Bound<'_, PyAny>>,
+        slide: Vec<String>,
+        fixed: Vec<String>,
+        solver: &str,
+        stiffness: &str,
+        no_rotation: bool,
+        tolerance: f64,
+        allow_inverted: bool,
+        partition: &str,
+        coarse_parts: usize,
+    ) -> PyResult<Self> {
+        let given = global_ids.is_some();
+        let keywords = Keywords {
+            motion: Motion {
+                rigid,
+                rotate_deg,
+                axis_point,
+                axis_dir,
+                translate,
+            },
+            displacements,
+            slide,
+            fixed,
+            solver: solver.into(),
+            stiffness: stiffness.into(),
+            no_rotation,
+            tolerance,
+            allow_inverted,
+            partition: partition.into(),
+        };
+        let read = read(
+            rank == 0,
+            mesh.as_ref(),
+            global_ids.as_ref(),
+            n_owned,
+            keywords,
+        );
+        let comm =
+            communicator(&world_ranks, rank).map_err(|e| errors::raise(py, Kind::Deform, e))?;
+        let same_way = all_ok(&comm, given) || all_ok(&comm, !given);
+        if !all_ok(&comm, same_way && read.is_ok()) {
+            return Err(refusal(py, read.err(), same_way));
+        }
+        let read = read?;
+        let kept = Kept::try_new(comm, |c| set_up(c, &read, coarse_parts))
+            .map_err(|e| errors::raise(py, Kind::Deform, e))?;
+        Ok(Self {
+            kept: Some(kept),
+            ignored: !given && rank != 0,
+            prescribed: read.prescribed,
+            given: read.given,
+            n_nodes: read.n_nodes,
+        })
+    }
+
+    /// Deforms for new values of the set-up's displacements (`(nodes, d)` or
+    /// `{node: (dx, dy, dz)}`, the same nodes as the set-up's; `None`: the set-up's own);
+    /// collective. See `aeroshape.distributed.Deformer.deform`.
+    #[pyo3(signature = (displacements=None))]
+    fn deform(
+        &self,
+        py: Python<'_>,
+        displacements: Option<Bound<'_, PyAny>>,
+    ) -> PyResult<PyDistributedDeformation> {
+        let Some(kept) = &self.kept else {
+            return Err(errors::raise(py, Kind::Deform, "the deformer was dropped"));
+        };
+        let values = match (&displacements, self.ignored) {
+            (Some(obj), false) => new_values(self, obj).map(Some),
+            _ => Ok(None),
+        };
+        let comm = kept.borrow_owner();
+        if !all_ok(comm, values.is_ok()) {
+            return Err(refusal(py, values.err(), true));
+        }
+        let values = values?;
+        let d = kept.borrow_dependent();
+        let out = d
+            .deform_with(values.as_deref())
+            .map_err(|e| errors::raise(py, Kind::Deform, errors::one_line(&e)))?;
+        result(py, done(d, out))
+    }
+
+    fn __repr__(&self) -> String {
+        match &self.kept {
+            Some(k) => format!(
+                "DistributedDeformer({} ranks, {} local nodes here, {} deformations)",
+                k.borrow_owner().size(),
+                k.borrow_dependent().partition().grid().mesh.n_nodes(),
+                k.borrow_dependent().deformations()
+            ),
+            None => "DistributedDeformer(dropped)".into(),
+        }
+    }
 }

@@ -11,7 +11,9 @@
 //! - [`deformation`]: `deform(mesh, rigid=..., slide=..., fixed=..., ...)`, the keywords of
 //!   `aeroshape deform`.
 //! - `distributed` (cargo feature `mpi`): `deform_distributed`, the distributed deformation
-//!   on an mpi4py communicator's processes (`aeroshape.distributed.deform`).
+//!   on an mpi4py communicator's processes (`aeroshape.distributed.deform`), and
+//!   `DistributedDeformer`, one set-up deformed for new displacements
+//!   (`aeroshape.distributed.Deformer`).
 //! - [`section`]: `section_fit` and `section_build`, as `aeroshape section fit|build`.
 //! - [`errors`]: Rust errors → Python exceptions carrying the command line's messages.
 //! - [`progress`]: progress to a callback or the `logging` logger `"aeroshape"`.
@@ -50,6 +52,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     #[cfg(feature = "mpi")]
     {
         m.add_class::<distributed::PyDistributedDeformation>()?;
+        m.add_class::<distributed::PyDistributedDeformer>()?;
         m.add_function(wrap_pyfunction!(distributed::deform_distributed, m)?)?;
     }
     m.add_class::<section::PySectionFit>()?;

@@ -9,6 +9,12 @@ distributed deformation through mpi4py against the serial ``aeroshape.deform`` o
    and fuselage lifted by 0.05 (without the sliding plane, the pitch above inverts a cell
    at the wing root even serially).
 3. Bad arguments on one rank only: every rank raises, nobody hangs.
+4. One set-up, two designs (``distributed.Deformer``): the wing and fuselage nodes displaced
+   (a lift growing along x), first by one amount, then by another through ``deform`` on the
+   same set-up; the second design must equal a new set-up's result bit for bit, differ from
+   the first, and lie within 1e-8 of the serial result; with the grid on rank 0 (the
+   symmetry plane sliding) and with given parts. A list naming other nodes raises on every
+   rank, and the deformer still works after it.
 
 Rank 0 prints one ``result`` line per check and exits 1 when one failed (after every
 collective call, so no rank is left waiting); an unexpected exception aborts the job.
@@ -121,6 +127,57 @@ def main() -> int:
     if rank == 0:
         ok = all(g and "given on some ranks" in g for g in got)
         check("mixed-ways", ok, " | ".join(map(str, got)))
+    # 4. One set-up, two designs.
+    wall = np.unique(np.concatenate(
+        [e.ravel() for name in ("wing", "fuselage") for e in mesh.markers[name].values()]))
+    span = np.abs(x0[:, 0]).max()
+    design = []
+    for h in (0.02, 0.05):
+        d = np.zeros((len(x0), 3))
+        d[wall, 2] = h * (1.0 + 0.5 * x0[wall, 0] / span)
+        design.append(d)
+    root = mesh if rank == 0 else None
+    slide = dict(slide=["symmetry"], tolerance=1e-11)
+    kept = distributed.Deformer(comm, root, displacements=(wall, design[0][wall]), **slide)
+    first = kept.deform()
+    order = wall[::-1]  # the same nodes in another order
+    second = kept.deform((order, design[1][order]))
+    fresh = distributed.deform(comm, root, displacements=(wall, design[1][wall]), **slide)
+    if rank == 0:
+        serial = aeroshape.deform(mesh, displacements=(wall, design[1][wall]), **slide).coordinates
+        dev = deviation(second.coordinates, serial, x0)
+        same = np.array_equal(second.coordinates, fresh.coordinates)
+        moved = np.abs(second.coordinates - first.coordinates).max()
+        n = second.report["deformations"]
+        check("kept-made", same and moved > 0 and dev <= REL and n == 2,
+              f"a new set-up's grid {'exactly' if same else 'NOT'}, {moved:.2e} from the first "
+              f"design, deviation {dev:.2e}, {n} deformations on the set-up")
+    raised = None
+    try:
+        kept.deform((wall[1:], design[1][wall[1:]]))
+    except (ValueError, aeroshape.DeformError) as e:
+        raised = f"{type(e).__name__}: {e}"
+    got = comm.gather(raised)
+    again = kept.deform((wall, design[1][wall]))
+    if rank == 0:
+        ok = (got[0].startswith("ValueError") and "the set-up was given" in got[0]
+              and all(g and "another rank refused" in g for g in got[1:])
+              and np.array_equal(again.coordinates, second.coordinates))
+        check("kept-refused", ok, " | ".join(map(str, got)))
+    # Given parts: each rank its owned wall nodes, in local numbering.
+    serial = (aeroshape.deform(mesh, displacements=(wall, design[1][wall]), tolerance=1e-11)
+              .coordinates if rank == 0 else None)
+    local = np.flatnonzero(np.isin(gids[:n_owned], wall))
+    kept = distributed.Deformer(comm, m, global_ids=gids, n_owned=n_owned,
+                                displacements=(local, design[0][gids[local]]), tolerance=1e-11)
+    second = kept.deform((local, design[1][gids[local]]))
+    fresh = distributed.deform(comm, m, global_ids=gids, n_owned=n_owned,
+                               displacements=(local, design[1][gids[local]]), tolerance=1e-11)
+    if rank == 0:
+        dev = deviation(second.coordinates, serial, x0)
+        same = np.array_equal(second.coordinates, fresh.coordinates)
+        check("kept-given", same and dev <= REL,
+              f"a new set-up's grid {'exactly' if same else 'NOT'}, deviation {dev:.2e}")
     if rank == 0 and failed:
         print(f"failed: {', '.join(failed)}", flush=True)
     return 1 if failed else 0

@@ -450,7 +450,7 @@ pub(crate) fn classify(
 
 /// Adds a boundary element to the skin: segments and triangles as they are, a quadrilateral
 /// as two triangles; other kinds carry no surface frame.
-fn push_skin(skin: &mut Vec<Vec<u32>>, kind: ElementKind, e: &[u32]) {
+pub(crate) fn push_skin(skin: &mut Vec<Vec<u32>>, kind: ElementKind, e: &[u32]) {
     match kind {
         ElementKind::Line | ElementKind::Triangle => skin.push(e.to_vec()),
         ElementKind::Quad => {

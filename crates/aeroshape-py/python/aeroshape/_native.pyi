@@ -386,6 +386,22 @@ def deform_distributed(
     of its processes, and this process's rank in it)."""
 
 @final
+class DistributedDeformer:
+    """The Rust half of ``aeroshape.distributed.Deformer``: one distributed set-up."""
+
+    def __init__(
+        self,
+        world_ranks: Sequence[int],
+        rank: int,
+        mesh: Mesh | _StrPath | None,
+        global_ids: _ArrayLike | None = None,
+        n_owned: int | None = None,
+        **keywords: Any,
+    ) -> None: ...
+    def deform(self, displacements: Any = None) -> DistributedDeformation:
+        """Deforms for new values of the set-up's displacements (collective)."""
+
+@final
 class SectionFit:
     """A fitted wing section (Eq. 39 thickness parameters, B-spline camber)."""
 

@@ -17,7 +17,7 @@ from typing import Any
 
 from . import _native
 
-__all__ = ["available", "deform"]
+__all__ = ["Deformer", "available", "deform"]
 
 
 def available() -> bool:
@@ -59,6 +59,13 @@ def deform(
     ``n_owned`` of this rank's nodes, and ``report`` (the same on every rank). Raises
     :class:`aeroshape.DeformError` (or ``ValueError`` for a bad argument) on every rank alike.
     """
+    return _native.deform_distributed(
+        _world_ranks(comm), comm.Get_rank(), mesh, global_ids, n_owned, **keywords
+    )
+
+
+def _world_ranks(comm: Any) -> list[int]:
+    """The ``MPI.COMM_WORLD`` ranks of the processes of ``comm``, in its order."""
     if not available():
         raise ImportError(
             "aeroshape was built without its cargo feature 'mpi': "
@@ -76,6 +83,54 @@ def deform(
         world.Free()
     if any(r == MPI.UNDEFINED for r in ranks):
         raise ValueError("comm: a process of the communicator is not in MPI.COMM_WORLD")
-    return _native.deform_distributed(
-        list(ranks), comm.Get_rank(), mesh, global_ids, n_owned, **keywords
-    )
+    return list(ranks)
+
+
+class Deformer:
+    """One distributed set-up deformed for new displacements as often as asked: an
+    optimiser's loop, whose wall moves anew at each design, pays for the partition once.
+
+    ``Deformer(comm, mesh, global_ids=None, n_owned=None, **keywords)`` takes the arguments of
+    :func:`deform` (collective) and sets the deformation up; :meth:`deform` then deforms it.
+    The partition, the nodes' roles, the unknowns, their halos and the coarse space are kept;
+    the springs, the operators and the preconditioner are built for each deformation, as the
+    serial deformation does. Each deformation starts from the baseline grid.
+
+    The deformer holds its own communicator over ``comm``'s processes and calls MPI with the
+    GIL held, from the thread that made it. MPI stays the caller's: a deformer still alive
+    when mpi4py finalises MPI at exit leaves its communicator unfreed rather than call MPI
+    after that.
+    """
+
+    def __init__(
+        self,
+        comm: Any,
+        mesh: Any = None,
+        *,
+        global_ids: Any = None,
+        n_owned: int | None = None,
+        **keywords: Any,
+    ) -> None:
+        self._native = _native.DistributedDeformer(
+            _world_ranks(comm), comm.Get_rank(), mesh, global_ids, n_owned, **keywords
+        )
+
+    def deform(self, displacements: Any = None) -> _native.DistributedDeformation:
+        """Deforms for new values of the set-up's ``displacements`` (collective).
+
+        ``displacements`` takes the forms of :func:`aeroshape.deform`'s (``(nodes, d)`` or
+        ``{node: (dx, dy, dz)}``) and must name the same nodes as the set-up's (in any
+        order); ``None``: the set-up's own. With the grid on rank 0, rank 0's are used and
+        the other ranks' ignored; with given parts, each rank passes its own (local
+        numbering) and the ghosts take their owners' values. The rigid markers move as set
+        up. A bad argument raises ``ValueError`` on its rank and :class:`aeroshape.DeformError`
+        ("another rank refused its arguments") on the others; a failed deformation raises
+        :class:`aeroshape.DeformError` on every rank, and the deformer stays usable.
+
+        Returns a ``DistributedDeformation``, as :func:`deform`; its ``report["deformations"]``
+        counts the deformations on this set-up.
+        """
+        return self._native.deform(displacements)
+
+    def __repr__(self) -> str:
+        return repr(self._native)

@@ -174,7 +174,9 @@ pub(crate) fn metis_in(
     // of a caller, or of the test harness) would interleave their draws and cut otherwise
     // than alone. One call at a time keeps every cut reproducible.
     static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let _alone = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     metis::Graph::new(1, nparts, &xadj, &adjncy)
         .map_err(|e| format!("METIS refused the node graph: {e}"))?
         .part_kway(&mut part)

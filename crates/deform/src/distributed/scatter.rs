@@ -101,7 +101,9 @@ impl Local {
         })();
         let mut cls = agree(comm, cls)?;
         let mut disp = bc.displacements.iter().map(|d| d.1).collect();
+        let before = cls.roles.clone();
         owners_roles(comm, &part, &mut cls, &mut disp);
+        displaced_skin(&part.grid.mesh, bc, &before, &mut cls);
         Ok(Self {
             part,
             cls,
@@ -317,6 +319,35 @@ fn role_code(role: NodeRole, disp: &[[f64; 3]]) -> [f64; 5] {
         NodeRole::Sliding(Constraint::Line(v)) => (LINE, 0, v),
     };
     [tag as f64, index as f64, pay[0], pay[1], pay[2]]
+}
+
+/// Completes the skin of the prescribed displacements of a given part once the ghosts have
+/// their owners' roles: the elements of the markers that are not rigid whose nodes are all
+/// displaced now, and were not before (a ghost displaced by its owner, not by this rank's
+/// list), as the serial classification takes them. Without them a wall moved by node
+/// displacements lost its skin elements across the partition's boundary, and R there: 5e-4
+/// of the displacement from the serial grid on the wing-body grid at 2 ranks.
+fn displaced_skin(mesh: &Mesh, bc: &BoundaryConditions, before: &[NodeRole], cls: &mut Classified) {
+    let displaced = |roles: &[NodeRole], e: &[u32]| {
+        e.iter()
+            .all(|&v| matches!(roles[v as usize], NodeRole::Displaced(_)))
+    };
+    for m in &mesh.markers {
+        let rigid = bc
+            .markers
+            .iter()
+            .any(|(name, r)| *name == m.name && matches!(r, MarkerRole::Rigid(_)));
+        if rigid {
+            continue;
+        }
+        for g in m.elements.groups() {
+            for e in g.iter() {
+                if displaced(&cls.roles, e) && !displaced(before, e) {
+                    crate::bc::push_skin(&mut cls.skin, g.kind, e);
+                }
+            }
+        }
+    }
 }
 
 /// The ghosts' roles as their owners classified them (collective): a ghost's own
