@@ -221,8 +221,9 @@ fn deform_on(
 
 /// `f` run on rank 0 on the cores of the ranks of its node (`distributed::root_pool`), the
 /// other ranks waiting for it asleep (`distributed::wait_idle`); `None` on the other ranks.
-/// Collective. At 1M nodes on 2 ranks the read took 0.36–0.41 s so against 0.52–0.54 s on
-/// rank 0's one core (docs/perf-log/2026-12-04-mpi-root-pool.md).
+/// Collective. At 1M nodes on 2 ranks the read took 0.47–0.56 s so against 0.65–0.94 s on
+/// rank 0's one core, the write 0.51–0.66 s against 0.69–0.84 s
+/// (docs/perf-log/2026-12-04-mpi-root-pool.md).
 fn on_root<T: Send>(world: &distributed::Comm, f: impl FnOnce() -> T + Send) -> Option<T> {
     let pool = distributed::root_pool(world);
     let out = (world.rank() == 0).then(|| match &pool {

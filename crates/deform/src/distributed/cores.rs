@@ -8,8 +8,8 @@
 //! all its threads on its one core. The pool's threads are bound to the union of the cores
 //! of the ranks on rank 0's node instead (`sched_setaffinity`, through the `nix` crate: the
 //! workspace forbids `unsafe`, and `nix` is the well-kept safe binding of it). At 1M nodes
-//! on 2 ranks, the partition took 3.5–3.7 s on one core and 2.7 s on the pool's two
-//! (docs/perf-log/2026-12-04-mpi-root-pool.md).
+//! on 2 ranks, the partition took 4.6–5.0 s on one core and 3.6–4.3 s on the pool's two
+//! (four runs each; docs/perf-log/2026-12-04-mpi-root-pool.md).
 
 use mpi::traits::*;
 
