@@ -1,7 +1,9 @@
-//! `deform_distributed(...)` (cargo feature `mpi`): the distributed deformation
-//! (`deform::distributed::Deformer`) on the processes of an mpi4py communicator; the Python
-//! half is `aeroshape.distributed.deform(comm, ...)`, which passes the communicator as the
-//! `MPI_COMM_WORLD` ranks of its processes (docs/python.md, "MPI").
+//! `DistributedDeformer` (cargo feature `mpi`): the distributed deformation
+//! (`deform::distributed::Deformer`) on the processes of an mpi4py communicator, set up once
+//! and deformed as often as asked; the Python half is `aeroshape.distributed.Deformer(comm,
+//! ...)` and `aeroshape.distributed.deform(comm, ...)` (one set-up, one deformation), which
+//! pass the communicator as the `MPI_COMM_WORLD` ranks of its processes (docs/python.md,
+//! "MPI").
 //!
 //! The communicator is rebuilt here from those ranks, with safe rsmpi calls only: the group of
 //! the world ranks, then `MPI_Comm_create_group` (collective over the communicator's processes
@@ -116,19 +118,6 @@ enum Input {
     Given(LocalGrid, ::deform::BoundaryConditions),
 }
 
-/// How the deformation ended on this rank (inside the GIL-free part).
-enum Outcome {
-    /// Deformed: the result, the whole grid on rank 0, the local nodes' global ids.
-    Done {
-        out: Box<distributed::DistDeformed>,
-        whole: Option<Vec<[f64; 3]>>,
-        ids: Vec<u64>,
-        n_owned: usize,
-    },
-    /// A rank refused its arguments (`same_way`: the ranks agreed on the way in).
-    Refused { same_way: bool },
-}
-
 /// The grid argument on rank 0: a `Mesh`, or a grid file read here.
 fn whole_grid(obj: &Bound<'_, PyAny>) -> PyResult<mesh::Mesh> {
     if let Ok(m) = obj.cast::<PyMesh>() {
@@ -169,7 +158,7 @@ struct Read {
     n_nodes: usize,
 }
 
-/// Reads this rank's arguments (see [`deform_distributed`]).
+/// Reads this rank's arguments (see [`PyDistributedDeformer::new`]).
 fn read(
     root: bool,
     mesh: Option<&Bound<'_, PyAny>>,
@@ -268,16 +257,6 @@ fn set_up<'c>(comm: &'c Comm, read: &Read, coarse_parts: usize) -> Result<Deform
     .map_err(|e| errors::one_line(&e))
 }
 
-/// A deformation's outcome with the whole grid gathered on rank 0 (collective).
-fn done(d: &Deformer<'_>, out: distributed::DistDeformed) -> Outcome {
-    Outcome::Done {
-        whole: d.gather(&out.coords),
-        ids: d.local_ids(),
-        n_owned: d.partition().grid().n_owned,
-        out: Box::new(out),
-    }
-}
-
 /// The error of a rank whose arguments some rank refused: its own, or why it refused none.
 fn refusal(py: Python<'_>, own: Option<PyErr>, same_way: bool) -> PyErr {
     match own {
@@ -290,112 +269,21 @@ fn refusal(py: Python<'_>, own: Option<PyErr>, same_way: bool) -> PyErr {
     }
 }
 
-/// The Python result of a deformation outcome.
-fn result(py: Python<'_>, outcome: Outcome) -> PyResult<PyDistributedDeformation> {
-    let Outcome::Done {
-        out,
-        whole,
-        ids,
-        n_owned,
-    } = outcome
-    else {
-        return Err(errors::raise(
-            py,
-            Kind::Deform,
-            "another rank refused its arguments",
-        ));
-    };
+/// The Python result of the deformation `out` of `d`, the whole grid gathered on rank 0
+/// (collective).
+fn result(
+    py: Python<'_>,
+    d: &Deformer<'_>,
+    out: &distributed::DistDeformed,
+) -> PyResult<PyDistributedDeformation> {
+    let whole = d.gather(&out.coords);
     Ok(PyDistributedDeformation {
         coordinates: whole.map(|x| arrays::coords(py, &x).into_any().unbind()),
         local_coordinates: arrays::coords(py, &out.coords).into_any().unbind(),
-        global_ids: arrays::ids(py, &ids)?.into_any().unbind(),
-        n_owned,
+        global_ids: arrays::ids(py, &d.local_ids())?.into_any().unbind(),
+        n_owned: d.partition().grid().n_owned,
         report: arrays::to_python(py, &out.report)?.unbind(),
     })
-}
-
-/// Runs the distributed deformation on the communicator of `world_ranks` (see the module
-/// doc); called by `aeroshape.distributed.deform`, which documents the keywords.
-#[pyfunction]
-#[pyo3(signature = (
-    world_ranks, rank, mesh, global_ids=None, n_owned=None, *, rigid=Vec::new(),
-    rotate_deg=0.0, axis_point=[0.0, 0.0, 0.0], axis_dir=[0.0, 0.0, 1.0],
-    translate=[0.0, 0.0, 0.0], displacements=None, slide=Vec::new(), fixed=Vec::new(),
-    solver="pcg", stiffness="inverse-length2", no_rotation=false, tolerance=1e-8,
-    allow_inverted=false, partition="metis", coarse_parts=distributed::COARSE_PARTS
-))]
-pub fn deform_distributed(
-    py: Python<'_>,
-    world_ranks: Vec<i32>,
-    rank: i32,
-    mesh: Option<Bound<'_, PyAny>>,
-    global_ids: Option<Bound<'_, PyAny>>,
-    n_owned: Option<usize>,
-    rigid: Vec<String>,
-    rotate_deg: f64,
-    axis_point: [f64; 3],
-    axis_dir: [f64; 3],
-    translate: [f64; 3],
-    displacements: Option<Bound<'_, PyAny>>,
-    slide: Vec<String>,
-    fixed: Vec<String>,
-    solver: &str,
-    stiffness: &str,
-    no_rotation: bool,
-    tolerance: f64,
-    allow_inverted: bool,
-    partition: &str,
-    coarse_parts: usize,
-) -> PyResult<PyDistributedDeformation> {
-    let given = global_ids.is_some();
-    let keywords = Keywords {
-        motion: Motion {
-            rigid,
-            rotate_deg,
-            axis_point,
-            axis_dir,
-            translate,
-        },
-        displacements,
-        slide,
-        fixed,
-        solver: solver.into(),
-        stiffness: stiffness.into(),
-        no_rotation,
-        tolerance,
-        allow_inverted,
-        partition: partition.into(),
-    };
-    // Every rank reads its own arguments; the ranks agree on the outcome before any exchange.
-    let (read, refused) = match read(
-        rank == 0,
-        mesh.as_ref(),
-        global_ids.as_ref(),
-        n_owned,
-        keywords,
-    ) {
-        Ok(v) => (Some(v), None),
-        Err(e) => (None, Some(e)),
-    };
-    // MPI runs without the GIL: the communicator is made, used and freed in here.
-    let outcome = py.detach(move || -> Result<Outcome, String> {
-        let comm = communicator(&world_ranks, rank)?;
-        // The ranks agree on the way in (a part on every rank, or none), then on the
-        // arguments.
-        let same_way = all_ok(&comm, given) || all_ok(&comm, !given);
-        let ok = all_ok(&comm, same_way && read.is_some());
-        let Some(read) = read.filter(|_| ok) else {
-            return Ok(Outcome::Refused { same_way });
-        };
-        let d = set_up(&comm, &read, coarse_parts)?;
-        let out = d.deform().map_err(|e| errors::one_line(&e))?;
-        Ok(done(&d, out))
-    });
-    match outcome {
-        Ok(Outcome::Refused { same_way }) => Err(refusal(py, refused, same_way)),
-        Ok(o) => result(py, o),
-        Err(e) => Err(errors::raise(py, Kind::Deform, e)),
-    }
 }
 
 self_cell!(
@@ -466,7 +354,7 @@ fn new_values(d: &PyDistributedDeformer, obj: &Bound<'_, PyAny>) -> PyResult<Vec
 #[pymethods]
 impl PyDistributedDeformer {
     /// Sets up the distributed deformation on the communicator of `world_ranks` (collective);
-    /// called by `aeroshape.distributed.Deformer`, which documents the keywords.
+    /// called by `aeroshape.distributed.Deformer` and `deform`, which document the keywords.
     #[new]
     #[pyo3(signature = (
         world_ranks, rank, mesh, global_ids=None, n_owned=None, *, rigid=Vec::new(),
@@ -567,7 +455,7 @@ impl PyDistributedDeformer {
         let out = d
             .deform_with(values.as_deref())
             .map_err(|e| errors::raise(py, Kind::Deform, errors::one_line(&e)))?;
-        result(py, done(d, out))
+        result(py, d, &out)
     }
 
     fn __repr__(&self) -> String {

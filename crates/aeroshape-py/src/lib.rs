@@ -10,10 +10,9 @@
 //! - [`grid`]: `Mesh`, `read_mesh`, `write_mesh`.
 //! - [`deformation`]: `deform(mesh, rigid=..., slide=..., fixed=..., ...)`, the keywords of
 //!   `aeroshape deform`.
-//! - `distributed` (cargo feature `mpi`): `deform_distributed`, the distributed deformation
-//!   on an mpi4py communicator's processes (`aeroshape.distributed.deform`), and
-//!   `DistributedDeformer`, one set-up deformed for new displacements
-//!   (`aeroshape.distributed.Deformer`).
+//! - `distributed` (cargo feature `mpi`): `DistributedDeformer`, the distributed deformation
+//!   on an mpi4py communicator's processes, set up once and deformed for new displacements
+//!   (`aeroshape.distributed.Deformer` and `deform`).
 //! - [`section`]: `section_fit` and `section_build`, as `aeroshape section fit|build`.
 //! - [`errors`]: Rust errors → Python exceptions carrying the command line's messages.
 //! - [`progress`]: progress to a callback or the `logging` logger `"aeroshape"`.
@@ -53,7 +52,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     {
         m.add_class::<distributed::PyDistributedDeformation>()?;
         m.add_class::<distributed::PyDistributedDeformer>()?;
-        m.add_function(wrap_pyfunction!(distributed::deform_distributed, m)?)?;
     }
     m.add_class::<section::PySectionFit>()?;
     m.add_function(wrap_pyfunction!(section::section_fit, m)?)?;

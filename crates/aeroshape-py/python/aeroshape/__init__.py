@@ -1,10 +1,11 @@
 """aeroshape: CAD-linked shape parametrisation and CFD grid deformation, from Python.
 
 The computations are aeroshape's Rust crates (the same code as the ``aeroshape`` command
-line); they run with the GIL released. Numpy arrays returned by this package are copies in
-numpy's own memory. Progress goes to a ``progress`` callback where a function takes one, or
-else to the ``logging`` logger ``"aeroshape"`` (DEBUG for progress, INFO for summaries,
-WARNING for reader remarks and violated constraints); nothing is printed.
+line); they run with the GIL released (but for ``aeroshape.distributed``'s MPI calls, which
+hold it). Numpy arrays returned by this package are copies in numpy's own memory. Progress
+goes to a ``progress`` callback where a function takes one, or else to the ``logging``
+logger ``"aeroshape"`` (DEBUG for progress, INFO for summaries, WARNING for reader remarks
+and violated constraints); nothing is printed.
 
 - :class:`Study` -- a case file built once; ``evaluate(x)`` gives the deformed grid,
   ``linearise(x)`` its exact ``jvp``/``vjp`` products.

@@ -374,17 +374,6 @@ class DistributedDeformation:
     def report(self) -> dict[str, Any]:
         """The distributed report (ranks, ghost nodes, partitioner, iterations, bytes...)."""
 
-def deform_distributed(
-    world_ranks: Sequence[int],
-    rank: int,
-    mesh: Mesh | _StrPath | None,
-    global_ids: _ArrayLike | None = None,
-    n_owned: int | None = None,
-    **keywords: Any,
-) -> DistributedDeformation:
-    """The Rust half of ``aeroshape.distributed.deform`` (the communicator as the world ranks
-    of its processes, and this process's rank in it)."""
-
 @final
 class DistributedDeformer:
     """The Rust half of ``aeroshape.distributed.Deformer``: one distributed set-up."""

@@ -22,7 +22,7 @@ __all__ = ["Deformer", "available", "deform"]
 
 def available() -> bool:
     """True when the package was built with the cargo feature ``mpi``."""
-    return hasattr(_native, "deform_distributed")
+    return hasattr(_native, "DistributedDeformer")
 
 
 def deform(
@@ -59,9 +59,7 @@ def deform(
     ``n_owned`` of this rank's nodes, and ``report`` (the same on every rank). Raises
     :class:`aeroshape.DeformError` (or ``ValueError`` for a bad argument) on every rank alike.
     """
-    return _native.deform_distributed(
-        _world_ranks(comm), comm.Get_rank(), mesh, global_ids, n_owned, **keywords
-    )
+    return Deformer(comm, mesh, global_ids=global_ids, n_owned=n_owned, **keywords).deform()
 
 
 def _world_ranks(comm: Any) -> list[int]:
