@@ -22,7 +22,7 @@ use super::partition::{LocalGrid, Partition, locality_order};
 use super::rfield::{Ctx, rotations};
 use super::scatter::Local;
 use super::slide::{self, Slide};
-use super::solve::{DistOperator, Overlap};
+use super::solve::{DistOperator, Held, Overlap};
 use crate::assembly::{System, rhs};
 use crate::bc::{BoundaryConditions, NodeRole};
 use crate::error::{Error, Result};
@@ -188,6 +188,12 @@ pub struct Deformer<'c> {
     /// The coarse space, made at the first deformation and kept (it depends on the
     /// baseline grid and the unknowns only).
     coarse: std::cell::OnceCell<Option<CoarseSpace>>,
+    /// Eq. 21's operator on the baseline grid with its free block multigrid (Eq. 26's) in
+    /// place and the constrained one (Eq. 21's) beside it: what every first increment
+    /// builds, kept from the last one (the serial `Deformer` keeps its baseline operator
+    /// too). Taken while an increment uses it: an error leaves it out, and the next first
+    /// increment builds it again, on every rank alike.
+    base: std::cell::RefCell<Option<(DistOperator, Held)>>,
 }
 
 /// True when this rank counts the element `e` of its local grid: it owns the element's node
@@ -386,6 +392,7 @@ impl<'c> Deformer<'c> {
             reach: Vec::new(),
             runs: std::cell::Cell::new(0),
             coarse: std::cell::OnceCell::new(),
+            base: std::cell::RefCell::new(None),
         })
     }
 
@@ -396,6 +403,7 @@ impl<'c> Deformer<'c> {
     pub fn coarse_parts(mut self, parts: usize) -> Self {
         self.coarse_parts = parts;
         self.coarse = std::cell::OnceCell::new();
+        self.base = std::cell::RefCell::new(None);
         self
     }
 
@@ -404,6 +412,7 @@ impl<'c> Deformer<'c> {
     /// blocks only; iterations of both in docs/mpi.md.
     pub fn overlap(mut self, on: bool) -> Self {
         self.overlap = on;
+        self.base = std::cell::RefCell::new(None);
         self
     }
 
@@ -645,24 +654,18 @@ impl<'c> Deformer<'c> {
             return Ok(Increment::default());
         }
         let t = Instant::now();
-        let mut sp = match opts.stiffness {
-            Stiffness::Volume | Stiffness::WallDistance => {
-                super::wall::springs(comm, part, &cls.roles, cur, opts.stiffness, self.scale)
-            }
-            _ => springs(&part.grid.mesh, cur, opts.stiffness, &part.adj, &[], None),
+        // The first increment starts from the baseline grid: its operator and both block
+        // multigrids are those of the last deformation's first increment, kept.
+        let baseline = cur == x0.as_slice();
+        let kept = if baseline {
+            self.base.borrow_mut().take()
+        } else {
+            None
         };
-        sp.scale = self.scale;
-        let overlap = (self.overlap && comm.size() > 1).then_some(Overlap {
-            comm,
-            halo: &self.unk_halo,
-            unk_node: &self.unk_node,
-        });
-        let op = DistOperator::new(sys, &part.adj, &sp, sys.node_of.len(), opts, overlap);
-        let mut op = agree(comm, op)?;
-        if let Some(space) = coarse {
-            let c = CoarseOp::new(comm, &self.unk_halo, space, &op, sys.node_of.len());
-            op.coarse = Some(agree(comm, c)?);
-        }
+        let (mut op, kept_held) = match kept {
+            Some((op, held)) => (op, Some(held)),
+            None => (self.operator(cur, coarse)?, None),
+        };
         sec.assemble += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let ctx = Ctx {
@@ -720,7 +723,11 @@ impl<'c> Deformer<'c> {
             None => sys.cons.clone(),
         };
         // Eq. 26 is solved: the block multigrid becomes the constrained one of Eq. 21.
-        op.hold(comm, &self.unk_halo, &cons);
+        let mut held = match kept_held {
+            Some(h) => h,
+            None => op.held(comm, &self.unk_halo, &cons),
+        };
+        op.swap(&mut held);
         let r = op.solve(
             comm,
             &self.unk_halo,
@@ -763,6 +770,10 @@ impl<'c> Deformer<'c> {
             }
         }
         part.halo.exchange(comm, cur);
+        if baseline {
+            op.swap(&mut held);
+            *self.base.borrow_mut() = Some((op, held));
+        }
         sec.solve += t.elapsed().as_secs_f64();
         let iterations = r.iterations + so.solver_iterations;
         Ok(Increment {
@@ -772,6 +783,32 @@ impl<'c> Deformer<'c> {
             slide: so,
             solver: r.solver,
         })
+    }
+
+    /// Eq. 21's operator at the local coordinates `cur` (springs, assembly, block
+    /// multigrid, the coarse-grid correction on `coarse`); collective.
+    fn operator(&self, cur: &[[f64; 3]], coarse: Option<&CoarseSpace>) -> Result<DistOperator> {
+        let (comm, opts, part, sys) = (self.comm, &self.opts, &self.local.part, &self.sys);
+        let mut sp = match opts.stiffness {
+            Stiffness::Volume | Stiffness::WallDistance => {
+                let roles = &self.local.cls.roles;
+                super::wall::springs(comm, part, roles, cur, opts.stiffness, self.scale)
+            }
+            _ => springs(&part.grid.mesh, cur, opts.stiffness, &part.adj, &[], None),
+        };
+        sp.scale = self.scale;
+        let overlap = (self.overlap && comm.size() > 1).then_some(Overlap {
+            comm,
+            halo: &self.unk_halo,
+            unk_node: &self.unk_node,
+        });
+        let op = DistOperator::new(sys, &part.adj, &sp, sys.node_of.len(), opts, overlap);
+        let mut op = agree(comm, op)?;
+        if let Some(space) = coarse {
+            let c = CoarseOp::new(comm, &self.unk_halo, space, &op, sys.node_of.len());
+            op.coarse = Some(agree(comm, c)?);
+        }
+        Ok(op)
     }
 
     /// This rank's piece of the grid at its local coordinates `coords` (a result's

@@ -59,9 +59,18 @@ pub(crate) struct DistOperator {
     pub couplings: Csr,
     /// The coarse-grid correction across the ranks (none on one rank).
     pub coarse: Option<CoarseOp>,
-    /// The block multigrid is the constrained one on some rank ([`DistOperator::hold`]; the
+    /// The block multigrid is the constrained one on some rank ([`DistOperator::swap`]; the
     /// same on every rank).
     held: bool,
+}
+
+/// A block multigrid beside the one in place ([`DistOperator::held`], [`DistOperator::swap`]):
+/// the constrained one of Eq. 21 while the free one serves Eq. 26, and the other way round.
+pub(crate) struct Held {
+    /// The other multigrid (None: this rank's block is the same for both).
+    amg: Option<Box<Amg<'static, f32>>>,
+    /// The `-held` flag that goes with it (the same on every rank).
+    any: bool,
 }
 
 /// The vectors of one solve, allocated once.
@@ -173,14 +182,14 @@ impl DistOperator {
         })
     }
 
-    /// Replaces the block multigrid by the constrained one of `cons` ([`Amg::new_held`]:
-    /// the unknowns' held components from their constraints, the ghosts' from their
-    /// owners' through the halo), for the constrained solves of Eq. 21 that follow; the
-    /// free one was Eq. 26's. Collective. A rank without held unknowns in its block keeps
-    /// its free multigrid (the same hierarchy); should the set-up fail on a rank, that rank
-    /// keeps its free multigrid too (a valid, slower preconditioner of the same system).
-    /// The solver's name gets `-held` when some rank holds (docs/mpi.md, "Preconditioner").
-    pub fn hold(&mut self, comm: &Comm, halo: &Halo, cons: &Constraints) {
+    /// The constrained block multigrid of `cons` ([`Amg::new_held`]: the unknowns' held
+    /// components from their constraints, the ghosts' from their owners' through the halo),
+    /// made beside the free one, which stays in place; [`DistOperator::swap`] exchanges
+    /// them. Collective. A rank without held unknowns in its block keeps its free multigrid
+    /// (the same hierarchy); should the set-up fail on a rank, that rank keeps its free
+    /// multigrid too (a valid, slower preconditioner of the same system). The solver's name
+    /// gets `-held` when some rank holds (docs/mpi.md, "Preconditioner").
+    pub fn held(&self, comm: &Comm, halo: &Halo, cons: &Constraints) -> Held {
         let n_all = self.ghost.ncols;
         let mask = held_mask(self.n_own, cons);
         let ext_mask = self.overlap_halo.then(|| {
@@ -192,26 +201,37 @@ impl DistOperator {
             v.iter().map(|x| x[0] as u8).collect::<Vec<u8>>()
         });
         let opts = AmgOptions::default();
-        match &mut self.block {
+        let amg = match &self.block {
             // Nothing held on this rank: the free multigrid is the constrained one.
-            Block::Amg(_) if mask.iter().all(|&m| m == 0) => {}
-            Block::Overlap(..) if ext_mask.as_ref().is_none_or(|k| k.iter().all(|&m| m == 0)) => {}
-            Block::Amg(m) => {
-                if let Ok(h) = Amg::new_held(m.fine().clone(), &opts, &mask) {
-                    **m = h;
-                    self.held = true;
-                }
+            Block::Amg(_) if mask.iter().all(|&m| m == 0) => None,
+            Block::Overlap(..) if ext_mask.as_ref().is_none_or(|k| k.iter().all(|&m| m == 0)) => {
+                None
             }
+            Block::Amg(m) => Amg::new_held(m.fine().clone(), &opts, &mask).ok(),
             Block::Overlap(m, ..) => {
                 let mask = ext_mask.expect("the extended block's mask");
-                if let Ok(h) = Amg::new_held(m.fine().clone(), &opts, &mask) {
-                    **m = h;
-                    self.held = true;
-                }
+                Amg::new_held(m.fine().clone(), &opts, &mask).ok()
             }
-            Block::Jacobi(..) => {}
+            Block::Jacobi(..) => None,
+        };
+        let any = max(comm, f64::from(u8::from(amg.is_some()))) > 0.0;
+        Held {
+            amg: amg.map(Box::new),
+            any,
         }
-        self.held = max(comm, f64::from(u8::from(self.held))) > 0.0;
+    }
+
+    /// Exchanges the block multigrid in place with the one `h` holds, and the solver's
+    /// `-held` flag with `h`'s: after [`DistOperator::held`], once puts the constrained
+    /// multigrid in place, twice puts the free one back. Local.
+    pub fn swap(&mut self, h: &mut Held) {
+        if let Some(a) = h.amg.as_mut() {
+            match &mut self.block {
+                Block::Amg(m) | Block::Overlap(m, ..) => std::mem::swap(m, a),
+                Block::Jacobi(..) => {}
+            }
+        }
+        std::mem::swap(&mut self.held, &mut h.any);
     }
 
     /// The owned–owned block.
