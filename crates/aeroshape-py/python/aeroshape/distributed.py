@@ -90,9 +90,9 @@ class Deformer:
 
     ``Deformer(comm, mesh, global_ids=None, n_owned=None, **keywords)`` takes the arguments of
     :func:`deform` (collective) and sets the deformation up; :meth:`deform` then deforms it.
-    The partition, the nodes' roles, the unknowns, their halos and the coarse space are kept;
-    the springs, the operators and the preconditioner are built for each deformation, as the
-    serial deformation does. Each deformation starts from the baseline grid.
+    The partition, the nodes' roles, the unknowns, their halos, the coarse space and the
+    baseline grid's operator with its block multigrids are kept (the increments after the
+    first, on the moved grid, build theirs). Each deformation starts from the baseline grid.
 
     The deformer holds its own communicator over ``comm``'s processes and calls MPI with the
     GIL held, from the thread that made it. MPI stays the caller's: a deformer still alive
