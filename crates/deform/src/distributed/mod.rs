@@ -19,7 +19,8 @@
 //!   nodes; `wall`: the grid-wide fields of the volume and wall-distance stiffnesses (the
 //!   mean cell volume, the distance from the moving boundary along grid edges).
 //! - [`deformer`]: [`Deformer`] (takes a communicator), the increments and the quality
-//!   guard with all-reduced counts, the gather on rank 0.
+//!   guard with all-reduced counts, the gather on rank 0; `report`: what it gives back
+//!   ([`DistDeformed`], [`DistReport`], [`DistSeconds`]).
 //! - `cores`: rank 0's thread pool on the cores of the ranks of its node ([`root_pool`]),
 //!   for its serial part of a partition made there, while the others wait asleep
 //!   ([`wait_idle`]).
@@ -33,6 +34,7 @@ pub mod metis;
 pub mod partition;
 mod quality;
 pub mod rcb;
+mod report;
 mod rfield;
 mod scatter;
 mod slide;
