@@ -378,10 +378,11 @@ impl<'c> Deformer<'c> {
     /// Deforms the grid for new values of the set-up's prescribed node displacements
     /// (`BoundaryConditions::displacements`, in the order the set-up was given them), the
     /// rest of the motion (rigid markers) as set up; `None`: those of the set-up, as
-    /// [`Deformer::deform`]. The partition, the nodes' roles, the unknowns and their halos
-    /// are kept: an optimiser's loop, whose wall moves anew at each design, pays for them
-    /// once. Which nodes are displaced is the set-up's: a node left out of it stays where
-    /// its role holds it.
+    /// [`Deformer::deform`]. The partition, the nodes' roles, the unknowns, their halos, the
+    /// coarse space and the baseline grid's operator with its block multigrids are kept: an
+    /// optimiser's loop, whose wall moves anew at each design, pays for them once. Which
+    /// nodes are displaced is the set-up's: a node left out of it stays where its role
+    /// holds it.
     ///
     /// For a set-up made on rank 0 ([`Deformer::from_root`]), `displacements` are read on
     /// rank 0 (the whole grid's list; the other ranks pass `None` or anything); for a given

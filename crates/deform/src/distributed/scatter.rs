@@ -325,8 +325,9 @@ fn role_code(role: NodeRole, disp: &[[f64; 3]]) -> [f64; 5] {
 /// their owners' roles: the elements of the markers that are not rigid whose nodes are all
 /// displaced now, and were not before (a ghost displaced by its owner, not by this rank's
 /// list), as the serial classification takes them. Without them a wall moved by node
-/// displacements lost its skin elements across the partition's boundary, and R there: 5e-4
-/// of the displacement from the serial grid on the wing-body grid at 2 ranks.
+/// displacements lost its skin elements across the partition's boundary, and R there: 5.3e-4
+/// of the displacement from the serial grid on the wing-body fixture grid, 9.4e-10 with
+/// them (tests/mpi_deform.py of the Python package).
 fn displaced_skin(mesh: &Mesh, bc: &BoundaryConditions, before: &[NodeRole], cls: &mut Classified) {
     let displaced = |roles: &[NodeRole], e: &[u32]| {
         e.iter()
