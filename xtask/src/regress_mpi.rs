@@ -247,19 +247,12 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
         "-q",
         "-p",
         "deform",
-        "--features",
-        "mpi",
-        "--example",
-        "distributed",
-    ])?;
-    crate::cargo(&[
-        "build",
-        "--release",
-        "-q",
         "-p",
         "aeroshape",
         "--features",
-        "mpi",
+        "deform/mpi,aeroshape/mpi",
+        "--example",
+        "distributed",
         "--example",
         "distributed_study",
     ])?;
@@ -360,7 +353,7 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
             drift.push(format!("mpi: -n {n}: inverted cells {inverted:?}"));
         }
         // The symmetry plane's nodes are held in y: Eq. 21's block multigrid is the
-        // constrained one (`DistOperator::hold`).
+        // constrained one (`DistOperator::held`).
         held_solver(dist, &format!("mpi: -n {n}"), drift);
         quality_matches_file(&bin, &o, &report["quality_after"], n, drift)?;
     }
@@ -368,29 +361,9 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
     crate::regress_mpi_study::run(root, &bin, drift)?;
     crate::regress_mpi_slide::run(root, &bin, drift)?;
     let ex = root.join("target/release/examples/distributed");
-    let res = mpirun(3, &ex, &["24", "ok"])?;
-    print!("{}", String::from_utf8_lossy(&res.stdout));
-    if !res.status.success() {
-        drift.push(format!(
-            "mpi: given partition, 3 ranks: {}",
-            String::from_utf8_lossy(&res.stderr)
-                .lines()
-                .next()
-                .unwrap_or("failed")
-        ));
-    }
+    example(3, &ex, &["24", "ok"], "mpi: given partition", drift)?;
     for n in [2usize, 3] {
-        let res = mpirun(n, &ex, &["16", "reuse"])?;
-        print!("{}", String::from_utf8_lossy(&res.stdout));
-        if !res.status.success() {
-            drift.push(format!(
-                "mpi: reused set-up, {n} ranks: {}",
-                String::from_utf8_lossy(&res.stderr)
-                    .lines()
-                    .next()
-                    .unwrap_or("failed")
-            ));
-        }
+        example(n, &ex, &["16", "reuse"], "mpi: reused set-up", drift)?;
     }
     for (mode, text) in [
         ("missing-ghost", "missing ghost"),
@@ -399,6 +372,25 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
         let res = mpirun(2, &ex, &["12", mode])?;
         let what = format!("mpi bad partition ({mode})");
         every_rank_failed(&res, 2, &what, |l| l.contains(text), text, drift);
+    }
+    Ok(())
+}
+
+/// `mpirun -n ranks` of an example that checks itself (`prog args`): prints what it printed,
+/// and records a drift named `what` with the first line of its error when it failed.
+pub(crate) fn example(
+    ranks: usize,
+    prog: &Path,
+    args: &[&str],
+    what: &str,
+    drift: &mut Vec<String>,
+) -> Result<(), String> {
+    let res = mpirun(ranks, prog, args)?;
+    print!("{}", String::from_utf8_lossy(&res.stdout));
+    if !res.status.success() {
+        let err = String::from_utf8_lossy(&res.stderr);
+        let line = err.lines().next().unwrap_or("failed");
+        drift.push(format!("{what}, {ranks} ranks: {line}"));
     }
     Ok(())
 }

@@ -127,20 +127,7 @@ pub fn run(root: &Path, bin: &Path, drift: &mut Vec<String>) -> Result<(), Strin
     // prints the gap, 0 to pass).
     let ex = root.join("target/release/examples/distributed_study");
     for n in [2usize, 3] {
-        let res = mpirun(n, &ex, &[&c, &dv])?;
-        print!(
-            "regress: mpi study: {}",
-            String::from_utf8_lossy(&res.stdout)
-        );
-        if !res.status.success() {
-            drift.push(format!(
-                "mpi study: kept set-up, {n} ranks: {}",
-                String::from_utf8_lossy(&res.stderr)
-                    .lines()
-                    .next()
-                    .unwrap_or("failed")
-            ));
-        }
+        crate::regress_mpi::example(n, &ex, &[&c, &dv], "mpi study: kept set-up", drift)?;
     }
     Ok(())
 }
