@@ -410,22 +410,8 @@ pub(crate) fn classify(
         }
         roles[v as usize] = NodeRole::Displaced(k);
     }
-    // Skin of the prescribed displacements: the elements of the other markers whose nodes
-    // all have one (a wall moved by the surface-grid update carries R like a rigid marker).
-    for (k, m) in mesh.markers.iter().enumerate() {
-        if matches!(role_of_marker[k], Some(MarkerRole::Rigid(_))) {
-            continue;
-        }
-        for g in m.elements.groups() {
-            for e in g.iter() {
-                if e.iter()
-                    .all(|&v| matches!(roles[v as usize], NodeRole::Displaced(_)))
-                {
-                    push_skin(&mut skin, g.kind, e);
-                }
-            }
-        }
-    }
+    let rigid = |k: usize| matches!(role_of_marker[k], Some(MarkerRole::Rigid(_)));
+    push_displaced_skin(mesh, rigid, &roles, |_| true, &mut skin);
     // Sliding nodes overridden by a motion are no longer sliding.
     let supports = supports
         .into_iter()
@@ -448,9 +434,40 @@ pub(crate) fn classify(
     })
 }
 
+/// True when every node of `e` has a prescribed displacement in `roles`.
+pub(crate) fn all_displaced(roles: &[NodeRole], e: &[u32]) -> bool {
+    e.iter()
+        .all(|&v| matches!(roles[v as usize], NodeRole::Displaced(_)))
+}
+
+/// Adds to `skin` the skin of the prescribed displacements: the elements of the markers
+/// that are not rigid (`rigid(k)` for marker `k`) whose nodes all have one in `roles`, and
+/// that `keep` accepts (a wall moved by the surface-grid update carries R like a rigid
+/// marker).
+pub(crate) fn push_displaced_skin(
+    mesh: &Mesh,
+    rigid: impl Fn(usize) -> bool,
+    roles: &[NodeRole],
+    keep: impl Fn(&[u32]) -> bool,
+    skin: &mut Vec<Vec<u32>>,
+) {
+    for (k, m) in mesh.markers.iter().enumerate() {
+        if rigid(k) {
+            continue;
+        }
+        for g in m.elements.groups() {
+            for e in g.iter() {
+                if all_displaced(roles, e) && keep(e) {
+                    push_skin(skin, g.kind, e);
+                }
+            }
+        }
+    }
+}
+
 /// Adds a boundary element to the skin: segments and triangles as they are, a quadrilateral
 /// as two triangles; other kinds carry no surface frame.
-pub(crate) fn push_skin(skin: &mut Vec<Vec<u32>>, kind: ElementKind, e: &[u32]) {
+fn push_skin(skin: &mut Vec<Vec<u32>>, kind: ElementKind, e: &[u32]) {
     match kind {
         ElementKind::Line | ElementKind::Triangle => skin.push(e.to_vec()),
         ElementKind::Quad => {

@@ -15,7 +15,10 @@ use super::cores::{broadcast_idle, on_pool, root_pool};
 use super::metis::{Partitioner, cut_in};
 use super::partition::{LocalGrid, Partition};
 use super::rcb::parts_in;
-use crate::bc::{BoundaryConditions, Classified, MarkerRole, NodeRole, RigidMotion, classify};
+use crate::bc::{
+    BoundaryConditions, Classified, MarkerRole, NodeRole, RigidMotion, all_displaced, classify,
+    push_displaced_skin,
+};
 use crate::error::{Error, Result};
 use crate::options::DeformOptions;
 use crate::solve::Constraint;
@@ -329,26 +332,14 @@ fn role_code(role: NodeRole, disp: &[[f64; 3]]) -> [f64; 5] {
 /// of the displacement from the serial grid on the wing-body fixture grid, 9.4e-10 with
 /// them (tests/mpi_deform.py of the Python package).
 fn displaced_skin(mesh: &Mesh, bc: &BoundaryConditions, before: &[NodeRole], cls: &mut Classified) {
-    let displaced = |roles: &[NodeRole], e: &[u32]| {
-        e.iter()
-            .all(|&v| matches!(roles[v as usize], NodeRole::Displaced(_)))
-    };
-    for m in &mesh.markers {
-        let rigid = bc
-            .markers
+    let rigid = |k: usize| {
+        let name = &mesh.markers[k].name;
+        bc.markers
             .iter()
-            .any(|(name, r)| *name == m.name && matches!(r, MarkerRole::Rigid(_)));
-        if rigid {
-            continue;
-        }
-        for g in m.elements.groups() {
-            for e in g.iter() {
-                if displaced(&cls.roles, e) && !displaced(before, e) {
-                    crate::bc::push_skin(&mut cls.skin, g.kind, e);
-                }
-            }
-        }
-    }
+            .any(|(n, r)| n == name && matches!(r, MarkerRole::Rigid(_)))
+    };
+    let new = |e: &[u32]| !all_displaced(before, e);
+    push_displaced_skin(mesh, rigid, &cls.roles, new, &mut cls.skin);
 }
 
 /// The ghosts' roles as their owners classified them (collective): a ghost's own
