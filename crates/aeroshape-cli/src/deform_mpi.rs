@@ -136,7 +136,7 @@ fn deform_on(
         );
     }
     let geometry = geometry?;
-    let input = on_root(world, || read(args, &request, geometry.as_ref()));
+    let input = distributed::on_root(world, || read(args, &request, geometry.as_ref()));
     // Every rank reports rank 0's error, so that all print the same line.
     let input = input.transpose();
     if let Some((_, e)) = distributed::first_failure(world, &input, |e| {
@@ -166,7 +166,7 @@ fn deform_on(
             let gathered = d.gather(&out.coords);
             let supports = d.gather_supports(&out);
             let (quality, dist) = (out.quality, &out.report);
-            on_root(world, move || match (input, gathered) {
+            distributed::on_root(world, move || match (input, gathered) {
                 (Some((m, _, _)), Some(coords)) => {
                     let t = Instant::now();
                     let mut m = m;
@@ -217,22 +217,6 @@ fn deform_on(
         );
     }
     Ok(())
-}
-
-/// `f` run on rank 0 on the cores of the ranks of its node (`distributed::root_pool`), the
-/// other ranks waiting for it asleep (`distributed::wait_idle`); `None` on the other ranks.
-/// Collective. At 1M nodes on 2 ranks the read took 0.47–0.56 s so against 0.65–0.94 s on
-/// rank 0's one core, the write 0.51–0.66 s against 0.69–0.84 s
-/// (docs/perf-log/2026-12-04-mpi-root-pool.md).
-fn on_root<T: Send>(world: &distributed::Comm, f: impl FnOnce() -> T + Send) -> Option<T> {
-    let pool = distributed::root_pool(world);
-    let out = (world.rank() == 0).then(|| match &pool {
-        Some(p) => p.install(f),
-        None => f(),
-    });
-    drop(pool);
-    distributed::wait_idle(world);
-    out
 }
 
 /// Puts the sliding nodes' new parameters into the grid's classification, as the serial

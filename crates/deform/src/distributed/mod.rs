@@ -42,7 +42,7 @@ mod solve;
 mod wall;
 
 pub use comm::{Comm, first_failure};
-pub use cores::{root_pool, wait_idle};
+pub use cores::{on_root, root_pool, wait_idle};
 pub use deformer::{COARSE_PARTS, Deformer, DistDeformed, DistReport, DistSeconds, OnSupports};
 pub use metis::{Cut, Partitioner};
 /// The MPI bindings (rsmpi) the distributed deformation is built on, for the caller's
