@@ -46,17 +46,17 @@ fn drop_node(g: &mut LocalGrid, v: u32) {
     g.mesh = m;
 }
 
+/// The largest distance between two node lists.
+fn gap(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let dist =
+        |p: &[f64; 3], q: &[f64; 3]| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
+    a.iter().zip(b).map(|(p, q)| dist(p, q)).fold(0.0, f64::max)
+}
+
 /// The largest distance of `x` from `serial` over the largest displacement of `serial`
 /// from `x0`.
 fn deviation(x: &[[f64; 3]], serial: &[[f64; 3]], x0: &[[f64; 3]]) -> f64 {
-    let dist =
-        |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
-    let (mut dev, mut disp) = (0.0f64, 0.0f64);
-    for ((a, b), c) in x.iter().zip(serial).zip(x0) {
-        dev = dev.max(dist(a, b));
-        disp = disp.max(dist(b, c));
-    }
-    dev / disp
+    gap(x, serial) / gap(serial, x0)
 }
 
 /// The timed run on the grid file `path` (see the module's doc).
@@ -193,13 +193,6 @@ fn wing_pitch(whole: &Mesh, deg: f64) -> Vec<(u32, [f64; 3])> {
             (v, [q[0] - p[0], q[1] - p[1], q[2] - p[2]])
         })
         .collect()
-}
-
-/// The largest distance between two node lists.
-fn gap(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    let dist =
-        |p: &[f64; 3], q: &[f64; 3]| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
-    a.iter().zip(b).map(|(p, q)| dist(p, q)).fold(0.0, f64::max)
 }
 
 /// The `reuse` mode (see the module's doc); errors are one line.
