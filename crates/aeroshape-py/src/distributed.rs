@@ -297,7 +297,8 @@ self_cell!(
 
 /// A distributed deformation set up once and deformed for new displacements as often as
 /// asked (`aeroshape.distributed.Deformer`): the partition, the nodes' roles, the unknowns,
-/// their halos and the coarse space are kept (`deform::distributed::Deformer::deform_with`).
+/// their halos, the coarse space and the baseline grid's operator are kept
+/// (`deform::distributed::Deformer::deform_with`).
 ///
 /// It holds its communicator (made from the world ranks as for `deform`) and runs its MPI
 /// calls with the GIL held (the communicator is tied to the thread that made it: the class
