@@ -4,8 +4,10 @@
 //! command: every node of the deformed grid within 1e-8 of the serial one, relative to the
 //! largest displacement, and no inverted cell; then a design vector naming no variable of the
 //! case, which every rank must refuse alike (exit status 1, no hang). Last, the example
-//! `distributed_study` at 2 and 3 ranks: a second design on the study's kept set-up equals
-//! a new study's result bit for bit.
+//! `distributed_study` at 2 and 3 ranks: a second design on the study's kept set-up, warm
+//! started, within 100 × the solves' tolerance of a new study's result, and cold (after
+//! `forget_warm_start`) equal to it bit for bit; the same design again, warm, in no
+//! iteration.
 
 use std::path::Path;
 use std::process::Command;

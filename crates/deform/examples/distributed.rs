@@ -14,6 +14,10 @@
 //! one, the second design through `Deformer::deform_with` on the first design's set-up
 //! must equal a new set-up's result bit for bit, differ from the first design, and lie
 //! within 1e-8 of the serial result; a list of the wrong length must fail on every rank.
+//! Warm started (`Deformer::deform_from`) from the second design, a third one near it (a
+//! pitch of -5.1°) must lie within 1e-8 of its cold start in fewer iterations, the same
+//! design again from it must take no iteration, and a warm start given on rank 0 alone must
+//! fail on every rank.
 //!
 //! `mpirun -n N distributed GRID.su2 [DEG]`: the same on a grid file, timed. Every rank reads
 //! the grid and cuts it by METIS (the cut is the same on every rank), keeps its part and
@@ -23,6 +27,14 @@
 //! (an optimiser's next design; largest over the ranks), then, once the other ranks are
 //! done, those of the serial `deform::Deformer::new` and `deform` of the whole grid on two
 //! threads, and the deviation of the gathered result from the serial one.
+//!
+//! `mpirun -n N distributed GRID.su2 DEG warm`: an optimiser's step on a grid file. The
+//! partition made as above; the nodes of `wing` and `fuselage` displaced by the pitch of
+//! DEG degrees (node displacements, so that a design changes them), every other marker
+//! fixed. Rank 0 prints the seconds and iterations of the first design, of a design 5 %
+//! further (pitch 1.05 DEG) from zero (`deform_with`) and from the first design's
+//! solutions (`deform_from`), and the deviation of the two, relative to the largest
+//! displacement.
 
 use std::process::ExitCode;
 
@@ -60,6 +72,80 @@ fn deviation(x: &[[f64; 3]], serial: &[[f64; 3]], x0: &[[f64; 3]]) -> f64 {
 }
 
 /// The timed run on the grid file `path` (see the module's doc).
+/// The `warm` mode on a grid file (see the module's doc); errors are one line.
+fn warm_file(world: &deform::distributed::Comm, path: &str, deg: f64) -> Result<(), String> {
+    use std::time::Instant;
+    let (rank, size) = (world.rank(), world.size() as usize);
+    let whole =
+        mesh::io::read_path(std::path::Path::new(path)).map_err(|e| format!("{path}: {e}"))?;
+    let cut =
+        deform::distributed::metis::cut(&whole, size, deform::distributed::Partitioner::Metis);
+    let grid = rcb::parts(&whole, &cut.part, size).swap_remove(rank as usize);
+    // The owned nodes of the moving markers, in local numbering, and their pitch.
+    let mut nodes: Vec<u32> = ["wing", "fuselage"]
+        .iter()
+        .filter_map(|m| grid.mesh.marker(m))
+        .flat_map(|m| m.elements.node_set())
+        .filter(|&v| (v as usize) < grid.n_owned)
+        .collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let pitch = |deg: f64| -> Vec<[f64; 3]> {
+        let motion = deform::RigidMotion {
+            angle_deg: deg,
+            axis_point: [5.0, 0.0, 0.0],
+            axis_dir: [0.0, 1.0, 0.0],
+            translation: [0.0; 3],
+        };
+        nodes
+            .iter()
+            .map(|&v| {
+                let p = grid.mesh.coords[v as usize];
+                let q = motion.apply(p, 1.0);
+                [q[0] - p[0], q[1] - p[1], q[2] - p[2]]
+            })
+            .collect()
+    };
+    let bc = BoundaryConditions {
+        markers: Vec::new(),
+        displacements: nodes.iter().copied().zip(pitch(deg)).collect(),
+    };
+    let opts = DeformOptions {
+        rel_tol: 1e-11,
+        ..DeformOptions::default()
+    };
+    let e = |e: deform::Error| e.to_string();
+    let largest = |t: f64| {
+        let mut m = 0.0;
+        world.all_reduce_into(&t, &mut m, mpi::collective::SystemOperation::max());
+        m
+    };
+    let near = pitch(1.05 * deg);
+    let d = Deformer::new(world, grid.clone(), &bc, &opts).map_err(e)?;
+    let timed = |f: &dyn Fn() -> deform::Result<deform::distributed::DistDeformed>| {
+        let t = Instant::now();
+        let out = f().map_err(e)?;
+        Ok::<_, String>((largest(t.elapsed().as_secs_f64()), out))
+    };
+    let (t1, first) = timed(&|| d.deform())?;
+    let (t_cold, cold) = timed(&|| d.deform_with(Some(&near)))?;
+    let (t_warm, warm) = timed(&|| d.deform_from(Some(&near), Some(&first)))?;
+    let it =
+        |o: &deform::distributed::DistDeformed| (o.report.iterations, o.report.rotation_iterations);
+    let (xc, xw) = (d.gather(&cold.coords), d.gather(&warm.coords));
+    if let (Some(xc), Some(xw)) = (xc, xw) {
+        let dev = deviation(&xw, &xc, &whole.coords);
+        println!(
+            "{size} ranks, warm start on {} nodes: first design {t1:.2} s {:?}; design 5 % further from zero {t_cold:.2} s {:?}, from the first's solutions {t_warm:.2} s {:?}; deviation {dev:.3e}",
+            first.report.nodes,
+            it(&first),
+            it(&cold),
+            it(&warm)
+        );
+    }
+    Ok(())
+}
+
 fn from_file(world: &deform::distributed::Comm, path: &str, deg: f64) -> ExitCode {
     use std::time::Instant;
     let (rank, size) = (world.rank(), world.size() as usize);
@@ -231,6 +317,28 @@ fn reuse(world: &deform::distributed::Comm, n: usize) -> Result<(), String> {
             second.report.deformations
         ));
     }
+    let values3: Vec<[f64; 3]> = wing_pitch(&whole, -5.1).iter().map(|d| d.1).collect();
+    let cold = set_up.deform_with(Some(&values3)).map_err(e)?;
+    let warm = set_up
+        .deform_from(Some(&values3), Some(&second))
+        .map_err(e)?;
+    let again = set_up.deform_from(Some(&values3), Some(&warm)).map_err(e)?;
+    let iters =
+        |o: &deform::distributed::DistDeformed| (o.report.iterations, o.report.rotation_iterations);
+    let (cold_it, warm_it, again_it) = (iters(&cold), iters(&warm), iters(&again));
+    if size > 1 {
+        let one = set_up.deform_from(Some(&values2), root.then_some(&first));
+        match one {
+            Err(err) if err.to_string().contains("warm start and others none") => {}
+            Err(err) => return Err(format!("warm start on one rank: unexpected error: {err}")),
+            Ok(_) => {
+                return Err(format!(
+                    "rank {rank}: a warm start on rank 0 alone was taken"
+                ));
+            }
+        }
+    }
+    let warm_x = set_up.gather(&warm.coords).zip(set_up.gather(&cold.coords));
     let made = [&first, &second, &new].map(|o| set_up.gather(&o.coords));
     // Given: each rank its part, its owned wing nodes' displacements in local numbering.
     let part = rcb(&whole.coords, size);
@@ -252,7 +360,9 @@ fn reuse(world: &deform::distributed::Comm, n: usize) -> Result<(), String> {
     let fresh = Deformer::new(world, grid, &g2, &opts).map_err(e)?;
     let new_given = fresh.deform().map_err(e)?;
     let given = [&reused, &new_given].map(|o| set_up.gather(&o.coords));
-    let ([Some(x1), Some(x2), Some(xn)], [Some(g2), Some(gn)]) = (made, given) else {
+    let ([Some(x1), Some(x2), Some(xn)], [Some(g2), Some(gn)], Some((xw, xc))) =
+        (made, given, warm_x)
+    else {
         return Ok(());
     };
     let serial = deform::deform(&whole, &bc2, &opts).map_err(e)?;
@@ -260,6 +370,25 @@ fn reuse(world: &deform::distributed::Comm, n: usize) -> Result<(), String> {
     let (made_gap, given_gap) = (gap(&x2, &xn), gap(&g2, &gn));
     let moved = gap(&x1, &x2);
     let dev = [&x2, &g2].map(|x| deviation(x, &serial.coords, x0));
+    let warm_dev = deviation(&xw, &xc, x0);
+    println!(
+        "{size} ranks, warm start: third design {warm_dev:.3e} from its cold start, iterations (Eq. 21, Eq. 26) {warm_it:?} against {cold_it:?} cold; the same design again {again_it:?}"
+    );
+    if warm_dev.is_nan() || warm_dev > 1e-8 {
+        return Err(format!(
+            "the warm-started design is {warm_dev:.3e} from the cold one"
+        ));
+    }
+    if warm_it.0 + warm_it.1 >= cold_it.0 + cold_it.1 {
+        return Err(format!(
+            "the warm start took {warm_it:?} iterations, the cold start {cold_it:?}"
+        ));
+    }
+    if again_it != (0, 0) {
+        return Err(format!(
+            "the same design again took {again_it:?} iterations"
+        ));
+    }
     println!(
         "{size} ranks, reuse: made on rank 0: second design {made_gap:.3e} from a new set-up, {:.3e} from serial, {moved:.3e} from the first; given: {given_gap:.3e} from a new set-up, {:.3e} from serial; a list of the wrong length refused on every rank",
         dev[0], dev[1]
@@ -287,6 +416,15 @@ fn main() -> ExitCode {
         .filter(|a| a.ends_with(".su2") || a.ends_with(".msh"))
     {
         let deg = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(2.0);
+        if args.get(3).is_some_and(|m| m == "warm") {
+            return match warm_file(&world, path, deg) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(1)
+                }
+            };
+        }
         return from_file(&world, path, deg);
     }
     if mode == "reuse" {

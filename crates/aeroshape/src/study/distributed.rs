@@ -21,8 +21,10 @@
 //! partition made on rank 0 and scattered, the nodes' roles, the unknowns and halos) is
 //! made at the first evaluation and kept: the next ones pass their wall displacements to
 //! it (`Deformer::deform_with`) as long as rank 0's list of prescribed nodes is the same,
-//! and make it anew when it is not. Each deformation starts from the baseline grid (no
-//! warm start).
+//! and make it anew when it is not. With `deform.warm_start` (the case's default), the
+//! solves of a deformation on the kept set-up start from the previous one's solutions
+//! (`Deformer::deform_from`), as the serial study's do; otherwise from the baseline, bit for
+//! bit the history-independent answer.
 //!
 //! Every fallible step ends with the ranks agreeing on its outcome: an error on one rank is
 //! returned on every rank with the same text ([`StudyError::Distributed`] on the others)
@@ -32,7 +34,7 @@ use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use deform::distributed::{Comm, Deformer, DistReport, mpi};
+use deform::distributed::{Comm, Deformer, DistDeformed, DistReport, mpi};
 use geom_db::GeomDb;
 use geom_db::prelude::Point3;
 use mesh::{ALL_KINDS, Elements, Marker, Mesh};
@@ -77,6 +79,9 @@ pub struct DistributedStudy<'c> {
     /// The distributed set-up of the last evaluation and, on rank 0, the grid nodes of its
     /// prescribed displacements, in order (empty on the other ranks).
     deformer: RefCell<Option<(Vec<u32>, Deformer<'c>)>>,
+    /// This rank's result of the last deformation on that set-up, kept for the warm start
+    /// of the next (with `deform.warm_start`).
+    last: RefCell<Option<DistDeformed>>,
 }
 
 /// The result of [`DistributedStudy::evaluate`].
@@ -328,6 +333,7 @@ impl<'c> DistributedStudy<'c> {
             quality_before,
             coarse_parts: deform::distributed::COARSE_PARTS,
             deformer: RefCell::new(None),
+            last: RefCell::new(None),
             setup,
             case,
         })
@@ -414,6 +420,12 @@ impl<'c> DistributedStudy<'c> {
         )?;
         let phase = SurfacePhase::from_update(&r, t.elapsed().as_secs_f64());
         Ok((geometry, surface, param, model, phase))
+    }
+
+    /// Makes the next evaluation start its solves from the baseline (see the module doc).
+    /// Local: every rank calls it, or the ranks' next deformation fails on every rank.
+    pub fn forget_warm_start(&self) {
+        *self.last.borrow_mut() = None;
     }
 
     /// Runs the chain for the design vector `x` on every rank (collective); see the module
@@ -521,9 +533,11 @@ impl<'c> DistributedStudy<'c> {
         // Rank 0 decides: the kept set-up serves when its prescribed nodes are these.
         let mut same = u8::from(kept.as_ref().is_some_and(|k| k.0 == nodes));
         comm.process_at_rank(0).broadcast_into(&mut same);
+        let mut last = self.last.borrow_mut();
         let d = match kept.take() {
             Some((nodes, d)) if same > 0 => (nodes, d),
             _ => {
+                *last = None;
                 let whole = self
                     .root
                     .as_ref()
@@ -542,9 +556,14 @@ impl<'c> DistributedStudy<'c> {
         let values: Option<Vec<[f64; 3]>> =
             bc.map(|bc| bc.displacements.iter().map(|d| d.1).collect());
         // A failed deformation (agreed on every rank) keeps the set-up for the next design.
-        let out = d.1.deform_with(values.as_deref()).map(|out| {
+        let warm = self.case.deform.warm_start;
+        let out =
+            d.1.deform_from(values.as_deref(), last.as_ref().filter(|_| warm));
+        let out = out.map(|out| {
             let gathered = d.1.gather(&out.coords);
-            (out.report, gathered)
+            let report = out.report.clone();
+            *last = warm.then_some(out);
+            (report, gathered)
         });
         *kept = Some(d);
         Ok(out?)

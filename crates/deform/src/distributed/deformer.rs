@@ -18,6 +18,7 @@ use super::comm::{Comm, agree, max, min, offsets, sum_u64};
 use super::halo::Halo;
 use super::metis::Partitioner;
 use super::partition::{LocalGrid, Partition, locality_order};
+use super::report::DistState;
 pub use super::report::{DistDeformed, DistReport, DistSeconds};
 use super::rfield::{Ctx, rotations};
 use super::scatter::Local;
@@ -49,6 +50,9 @@ struct Increment {
     slide: SlideOutcome,
     /// The Eq. 21 solver's name.
     solver: String,
+    /// The Eq. 21 and Eq. 26 solutions per owned unknown (empty when nothing moved).
+    dx: Vec<V3>,
+    qv: Vec<V3>,
 }
 
 /// The least aggregates per rank of the coarse-grid correction by default
@@ -372,7 +376,7 @@ impl<'c> Deformer<'c> {
 
     /// Deforms the grid for the prescribed motion of the set-up (collective).
     pub fn deform(&self) -> Result<DistDeformed> {
-        self.run(&self.local.disp)
+        self.run(&self.local.disp, None)
     }
 
     /// Deforms the grid for new values of the set-up's prescribed node displacements
@@ -390,6 +394,40 @@ impl<'c> Deformer<'c> {
     /// their owners' values. A list of another length than the set-up's, or a value that
     /// is not finite, fails on every rank with the same error. Collective.
     pub fn deform_with(&self, displacements: Option<&[[f64; 3]]>) -> Result<DistDeformed> {
+        self.deform_from(displacements, None)
+    }
+
+    /// [`Deformer::deform_with`] from the solutions of an earlier result of this set-up,
+    /// as the serial [`crate::Deformer::deform`]'s `warm_start`: `warm_start`'s Eq. 26
+    /// solution starts the R field's solve, its Δx the Eq. 21 solve and its sliding nodes'
+    /// parameters their iteration, when the deformation takes one increment (a guard's
+    /// retry in more increments starts from the baseline). Without it every solve starts
+    /// from zero and the answer is bit for bit [`Deformer::deform_with`]'s; with it the
+    /// answer agrees with that one to the solver tolerances, and takes fewer iterations
+    /// when the designs are close (the same motion again takes none). Every rank passes
+    /// its own result of the same earlier deformation, or every rank none; a result of
+    /// another set-up (another count of owned unknowns on some rank) fails on every rank.
+    /// Collective.
+    pub fn deform_from(
+        &self,
+        displacements: Option<&[[f64; 3]]>,
+        warm_start: Option<&DistDeformed>,
+    ) -> Result<DistDeformed> {
+        let has = f64::from(u8::from(warm_start.is_some()));
+        let fits = warm_start.is_none_or(|w| w.state.unknowns == self.sys.node_of.len());
+        if min(self.comm, has) != max(self.comm, has) {
+            return Err(Error::Distributed {
+                rank: self.comm.rank(),
+                reason: "some ranks gave a warm start and others none".into(),
+            });
+        }
+        if min(self.comm, f64::from(u8::from(fits))) == 0.0 {
+            return Err(Error::Distributed {
+                rank: self.comm.rank(),
+                reason: "the warm start is a result of another set-up".into(),
+            });
+        }
+        let warm = warm_start.map(|w| &w.state);
         let given = self.local.caller.is_some();
         let new = if given {
             let given = displacements.is_some();
@@ -409,17 +447,17 @@ impl<'c> Deformer<'c> {
             on_root > 0
         };
         if !new {
-            return self.run(&self.local.disp);
+            return self.run(&self.local.disp, warm);
         }
         let disp = self
             .local
             .displacements(self.comm, displacements.unwrap_or(&[]))?;
-        self.run(&disp)
+        self.run(&disp, warm)
     }
 
-    /// The deformation for the displacements `disp` of the local displaced nodes
-    /// (collective).
-    fn run(&self, disp: &[[f64; 3]]) -> Result<DistDeformed> {
+    /// The deformation for the displacements `disp` of the local displaced nodes, from the
+    /// solutions `warm` in one increment (collective).
+    fn run(&self, disp: &[[f64; 3]], warm: Option<&DistState>) -> Result<DistDeformed> {
         let (comm, opts, part) = (self.comm, &self.opts, &self.local.part);
         self.runs.set(self.runs.get() + 1);
         let x0 = &part.grid.mesh.coords;
@@ -449,14 +487,27 @@ impl<'c> Deformer<'c> {
         loop {
             rep.attempts.push(inc);
             let mut cur = x0.clone();
-            let mut params = slide.map_or_else(Vec::new, Slide::initial_params);
+            let warm = warm.filter(|_| inc == 1);
+            let mut params = match (slide, warm) {
+                (Some(sl), Some(w)) if w.params.len() == sl.initial_params().len() => {
+                    w.params.clone()
+                }
+                (sl, _) => sl.map_or_else(Vec::new, Slide::initial_params),
+            };
+            let mut state = DistState {
+                unknowns: self.sys.node_of.len(),
+                ..DistState::default()
+            };
             let (mut iterations, mut rot_iterations, mut residual) = (0, 0, 0.0f64);
             let (mut slide_iterations, mut slide_update) = (0, 0.0f64);
             let mut solver = String::new();
             for m in 1..=inc {
                 let s = if m == inc { 1.0 } else { m as f64 / inc as f64 };
                 let (c, sec) = (coarse.as_ref(), &mut rep.seconds);
-                let o = self.increment(s, disp, &mut cur, &mut params, c, sec)?;
+                let o = self.increment(s, disp, &mut cur, &mut params, c, sec, warm)?;
+                if inc == 1 {
+                    (state.dx, state.qv) = (o.dx, o.qv);
+                }
                 iterations += o.iterations;
                 rot_iterations += o.rotation_iterations;
                 residual = residual.max(o.residual);
@@ -497,6 +548,9 @@ impl<'c> Deformer<'c> {
                 rep.slide_max_move = max(comm, sl.place(&mut moved, &params, x0));
                 supports = sl.supports(&params);
             }
+            if inc == 1 {
+                state.params = params;
+            }
             let s = &mut rep.seconds;
             [s.assemble, s.rotation, s.solve, s.quality] =
                 [s.assemble, s.rotation, s.solve, s.quality].map(|v| max(comm, v));
@@ -508,13 +562,16 @@ impl<'c> Deformer<'c> {
                 supports,
                 quality: [before, after],
                 report: rep,
+                state,
             });
         }
     }
 
     /// One increment to the fraction `s` of the motion (`disp`: the displaced nodes'
     /// displacements), from `cur` (local nodes, ghosts up to date) and the sliding nodes'
-    /// parameters `params`; returns what it did.
+    /// parameters `params`, the solves starting from `warm`'s solutions when given;
+    /// returns what it did.
+    #[allow(clippy::too_many_arguments)]
     fn increment(
         &self,
         s: f64,
@@ -523,6 +580,7 @@ impl<'c> Deformer<'c> {
         params: &mut [[f64; 2]],
         coarse: Option<&CoarseSpace>,
         sec: &mut DistSeconds,
+        warm: Option<&DistState>,
     ) -> Result<Increment> {
         let (comm, opts, part, sys) = (self.comm, &self.opts, &self.local.part, &self.sys);
         let cls = &self.local.cls;
@@ -581,7 +639,7 @@ impl<'c> Deformer<'c> {
             opts,
             reach: &self.reach,
         };
-        let rf = rotations(&ctx, &op, cur, &target)?;
+        let rf = rotations(&ctx, &op, cur, &target, warm.map(|w| w.qv.as_slice()))?;
         sec.rotation += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let op_ref = &op;
@@ -618,7 +676,17 @@ impl<'c> Deformer<'c> {
         }
         sec.assemble += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let mut dx: Vec<V3> = vec![[0.0; 3]; sys.node_of.len()];
+        let nu = sys.node_of.len();
+        let mut dx: Vec<V3> = match warm {
+            Some(w) if w.dx.len() == nu => w.dx.clone(),
+            _ => vec![[0.0; 3]; nu],
+        };
+        // The sliding's outer iteration measures its first update from the guess.
+        let dx0 = if self.slide.is_some() {
+            dx.clone()
+        } else {
+            Vec::new()
+        };
         let cons = match &self.slide {
             Some(sl) => sl.constraints(comm, &sys.cons, params)?,
             None => sys.cons.clone(),
@@ -652,6 +720,7 @@ impl<'c> Deformer<'c> {
                 cur,
                 &b,
                 &mut dx,
+                dx0,
                 params,
                 opts,
                 max_disp,
@@ -683,6 +752,8 @@ impl<'c> Deformer<'c> {
             residual: r.rel_residual,
             slide: so,
             solver: r.solver,
+            dx,
+            qv: rf.solution,
         })
     }
 

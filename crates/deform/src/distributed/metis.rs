@@ -134,19 +134,19 @@ pub(crate) fn metis_in(
                 (lo.unwrap_or(0), c as u32)
             })
             .collect();
-        // The keys are distinct: the parallel sort gives the serial order.
+        // The keys are distinct: the parallel sort gives the serial order; the cells are
+        // then gathered in it in parallel (at 1M nodes the cut took 2.05–2.08 s from the
+        // classification, against 2.24 s with the cells pushed one by one).
         by_node.par_sort_unstable();
-        let mut e = Vec::with_capacity(nn);
-        for (_, c) in by_node {
-            let c = c as usize;
-            e.clear();
-            e.extend(
+        cells.group_mut(g.kind).nodes = by_node
+            .par_iter()
+            .flat_map_iter(|&(_, c)| {
+                let c = c as usize;
                 g.nodes[c * nn..(c + 1) * nn]
                     .iter()
-                    .map(|&v| perm[v as usize]),
-            );
-            cells.push(g.kind, &e, None);
-        }
+                    .map(|&v| perm[v as usize])
+            })
+            .collect();
     }
     let adj = Adjacency::from_elements(n, &cells);
     drop(cells);

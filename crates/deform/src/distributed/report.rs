@@ -107,4 +107,21 @@ pub struct DistDeformed {
     pub quality: [Summary; 2],
     /// What was done.
     pub report: DistReport,
+    /// This rank's solutions, the warm start of a later deformation on the same set-up
+    /// ([`Deformer::deform_from`](super::Deformer::deform_from)).
+    pub(crate) state: DistState,
+}
+
+/// A rank's solutions of a deformation, per owned unknown of its set-up: what a warm start
+/// begins from (empty when the deformation took more than one increment, or nothing moved).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct DistState {
+    /// Owned unknowns of the set-up that made it (a check on reuse).
+    pub unknowns: usize,
+    /// Δx of Eq. 21.
+    pub dx: Vec<sparse::V3>,
+    /// The Eq. 26 solution (the quaternions' vector part as solved, before the clamp).
+    pub qv: Vec<sparse::V3>,
+    /// The parameters of the owned nodes sliding on supports.
+    pub params: Vec<[f64; 2]>,
 }

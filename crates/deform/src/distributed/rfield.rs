@@ -25,6 +25,9 @@ pub(crate) struct Rotations {
     /// False when every R_i is the identity on every rank.
     pub any: bool,
     pub iterations: usize,
+    /// The Eq. 26 solution per owned unknown (before the clamp; empty when nothing
+    /// rotates).
+    pub solution: Vec<V3>,
 }
 
 impl Rotations {
@@ -69,12 +72,14 @@ pub(crate) struct Ctx<'a> {
     pub reach: &'a [f64],
 }
 
-/// R for the motion of the skin from `cur` to `target` (local nodes).
+/// R for the motion of the skin from `cur` to `target` (local nodes); the Eq. 26 solve
+/// starts from `warm` (per owned unknown) when given, else from R = I.
 pub(crate) fn rotations(
     c: &Ctx,
     op: &DistOperator,
     cur: &[[f64; 3]],
     target: &[[f64; 3]],
+    warm: Option<&[V3]>,
 ) -> Result<Rotations> {
     let n = cur.len();
     let mut q = vec![[0.0, 0.0, 0.0, 1.0]; n];
@@ -82,6 +87,7 @@ pub(crate) fn rotations(
         q: Vec::new(),
         any: false,
         iterations: 0,
+        solution: Vec::new(),
     };
     if !c.opts.adapt_rotation {
         out.q = q;
@@ -150,7 +156,10 @@ pub(crate) fn rotations(
         |j| [q[j][0], q[j][1], q[j][2]],
         |_, _| [0.0; 3],
     );
-    let mut xv = vec![[0.0; 3]; bv.len()];
+    let mut xv = match warm {
+        Some(w) if w.len() == bv.len() => w.to_vec(),
+        _ => vec![[0.0; 3]; bv.len()],
+    };
     let rep = op.solve(
         c.comm,
         c.unk_halo,
@@ -170,5 +179,6 @@ pub(crate) fn rotations(
     }
     c.node_halo.exchange(c.comm, &mut q);
     out.q = q;
+    out.solution = xv;
     Ok(out)
 }

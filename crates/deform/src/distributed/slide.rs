@@ -165,7 +165,7 @@ impl Slide {
     }
 
     /// The outer iteration from the constrained solution `dx` of A Δx = `b` (owned unknowns,
-    /// Δx from the state `cur`, updates measured from the solve's zero initial guess), as the
+    /// Δx from the state `cur`, updates measured from the solve's initial guess `dx0`), as the
     /// serial `Sliding::iterate`: place every owned sliding node on its support nearest to
     /// its tentative position (parameters in `params`), re-linearise the constraints there
     /// and solve for the correction over the ranks, until the largest node update over the
@@ -182,13 +182,14 @@ impl Slide {
         cur: &[[f64; 3]],
         b: &[V3],
         dx: &mut [V3],
+        dx0: Vec<V3>,
         params: &mut [[f64; 2]],
         opts: &DeformOptions,
         max_disp: f64,
     ) -> Result<SlideOutcome> {
         let n = dx.len();
         let bnorm = sum(comm, dot(b, b)).sqrt();
-        let mut prev: Vec<V3> = vec![[0.0; 3]; n];
+        let mut prev = dx0;
         let mut out = SlideOutcome::default();
         let mut converged = false;
         let mut update = f64::INFINITY;
