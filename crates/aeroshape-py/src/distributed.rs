@@ -317,6 +317,8 @@ pub struct PyDistributedDeformer {
     n_nodes: usize,
     /// The grid came whole on rank 0 and this is not rank 0: displacements are ignored.
     ignored: bool,
+    /// This rank's result of the last deformation, the warm start of the next.
+    last: std::cell::RefCell<Option<distributed::DistDeformed>>,
 }
 
 impl Drop for PyDistributedDeformer {
@@ -428,17 +430,21 @@ impl PyDistributedDeformer {
             prescribed: read.prescribed,
             given: read.given,
             n_nodes: read.n_nodes,
+            last: std::cell::RefCell::new(None),
         })
     }
 
     /// Deforms for new values of the set-up's displacements (`(nodes, d)` or
-    /// `{node: (dx, dy, dz)}`, the same nodes as the set-up's; `None`: the set-up's own);
-    /// collective. See `aeroshape.distributed.Deformer.deform`.
-    #[pyo3(signature = (displacements=None))]
+    /// `{node: (dx, dy, dz)}`, the same nodes as the set-up's; `None`: the set-up's own),
+    /// with `warm_start` from the last deformation's solutions
+    /// (`deform::distributed::Deformer::deform_from`); collective. See
+    /// `aeroshape.distributed.Deformer.deform`.
+    #[pyo3(signature = (displacements=None, warm_start=false))]
     fn deform(
         &self,
         py: Python<'_>,
         displacements: Option<Bound<'_, PyAny>>,
+        warm_start: bool,
     ) -> PyResult<PyDistributedDeformation> {
         let Some(kept) = &self.kept else {
             return Err(errors::raise(py, Kind::Deform, "the deformer was dropped"));
@@ -453,10 +459,13 @@ impl PyDistributedDeformer {
         }
         let values = values?;
         let d = kept.borrow_dependent();
+        let mut last = self.last.borrow_mut();
         let out = d
-            .deform_with(values.as_deref())
+            .deform_from(values.as_deref(), last.as_ref().filter(|_| warm_start))
             .map_err(|e| errors::raise(py, Kind::Deform, errors::one_line(&e)))?;
-        result(py, d, &out)
+        let r = result(py, d, &out);
+        *last = Some(out);
+        r
     }
 
     fn __repr__(&self) -> String {

@@ -164,6 +164,18 @@ def main() -> int:
               and all(g and "another rank refused" in g for g in got[1:])
               and np.array_equal(again.coordinates, second.coordinates))
         check("kept-refused", ok, " | ".join(map(str, got)))
+    # A warm start: a design 2 % further from the last one's solutions, against cold.
+    near = (wall, 1.02 * design[1][wall])
+    warm = kept.deform(near, warm_start=True)
+    cold = kept.deform(near)
+    same = kept.deform(near, warm_start=True)
+    if rank == 0:
+        its = [r.report["iterations"] + r.report["rotation_iterations"]
+               for r in (warm, cold, same)]
+        dev = deviation(warm.coordinates, cold.coordinates, x0)
+        check("kept-warm", dev <= REL and its[0] < its[1] and its[2] == 0,
+              f"{dev:.2e} from the cold start, iterations warm {its[0]}, cold {its[1]}, "
+              f"the same design again {its[2]}")
     # Given parts: each rank its owned wall nodes, in local numbering.
     serial = (aeroshape.deform(mesh, displacements=(wall, design[1][wall]), tolerance=1e-11)
               .coordinates if rank == 0 else None)

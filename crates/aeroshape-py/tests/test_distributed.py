@@ -59,5 +59,5 @@ def test_mpi4py_communicator_gives_the_serial_grid(mpirun, ranks):
     names = [line.split(":")[0].split()[1] for line in results]
     assert names == ["file-metis", "file-metis-local", "mesh-rcb", "mesh-rcb-local", "given",
                      "bad-argument", "mixed-ways", "kept-made", "kept-refused",
-                     "kept-given"], report
+                     "kept-warm", "kept-given"], report
     assert "partitioner metis" in results[0], report

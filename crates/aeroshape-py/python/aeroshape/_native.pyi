@@ -387,7 +387,9 @@ class DistributedDeformer:
         n_owned: int | None = None,
         **keywords: Any,
     ) -> None: ...
-    def deform(self, displacements: Any = None) -> DistributedDeformation:
+    def deform(
+        self, displacements: Any = None, warm_start: bool = False
+    ) -> DistributedDeformation:
         """Deforms for new values of the set-up's displacements (collective)."""
 
 @final

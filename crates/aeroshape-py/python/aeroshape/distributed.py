@@ -92,7 +92,9 @@ class Deformer:
     :func:`deform` (collective) and sets the deformation up; :meth:`deform` then deforms it.
     The partition, the nodes' roles, the unknowns, their halos, the coarse space and the
     baseline grid's operator with its block multigrids are kept (the increments after the
-    first, on the moved grid, build theirs). Each deformation starts from the baseline grid.
+    first, on the moved grid, build theirs). Each deformation starts from the baseline grid;
+    its solves start from zero, or with ``warm_start=True`` from the last deformation's
+    solutions.
 
     The deformer holds its own communicator over ``comm``'s processes and calls MPI with the
     GIL held, from the thread that made it. MPI stays the caller's: a deformer still alive
@@ -113,7 +115,9 @@ class Deformer:
             _world_ranks(comm), comm.Get_rank(), mesh, global_ids, n_owned, **keywords
         )
 
-    def deform(self, displacements: Any = None) -> _native.DistributedDeformation:
+    def deform(
+        self, displacements: Any = None, *, warm_start: bool = False
+    ) -> _native.DistributedDeformation:
         """Deforms for new values of the set-up's ``displacements`` (collective).
 
         ``displacements`` takes the forms of :func:`aeroshape.deform`'s (``(nodes, d)`` or
@@ -125,10 +129,16 @@ class Deformer:
         ("another rank refused its arguments") on the others; a failed deformation raises
         :class:`aeroshape.DeformError` on every rank, and the deformer stays usable.
 
+        ``warm_start=True`` starts the solves (the R field's, the spring system's, the
+        sliding's) from the solutions of this deformer's last deformation, as the serial
+        ``warm_start`` does: the answer agrees with the cold one to the solver tolerance, in
+        fewer iterations when the designs are close (the same design again takes none).
+        Pass the same value on every rank; the first deformation starts cold either way.
+
         Returns a ``DistributedDeformation``, as :func:`deform`; its ``report["deformations"]``
         counts the deformations on this set-up.
         """
-        return self._native.deform(displacements)
+        return self._native.deform(displacements, warm_start)
 
     def __repr__(self) -> str:
         return repr(self._native)
