@@ -277,7 +277,16 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
     let g = grid.display().to_string();
     let serial = out.join("serial.su2");
     let s = serial.display().to_string();
-    let mut args = vec!["deform", g.as_str(), "-o", s.as_str()];
+    let serial_report = out.join("serial.json");
+    let sr = serial_report.display().to_string();
+    let mut args = vec![
+        "deform",
+        g.as_str(),
+        "-o",
+        s.as_str(),
+        "--report",
+        sr.as_str(),
+    ];
     args.extend(FLAGS);
     eprintln!("$ aeroshape {}", args.join(" "));
     let st = Command::new(&bin)
@@ -289,6 +298,11 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
     }
     let x0 = su2_points(&grid)?;
     let xs = su2_points(&serial)?;
+    let serial_far: serde_json::Value = std::fs::read_to_string(&serial_report)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .map(|v| v["far_field"].clone())
+        .ok_or_else(|| format!("{}: unreadable report", serial_report.display()))?;
     for n in [2usize, 3] {
         let o = out.join(format!("ranks{n}.su2"));
         let r = out.join(format!("ranks{n}.json"));
@@ -357,6 +371,7 @@ pub fn run(root: &Path, drift: &mut Vec<String>) -> Result<(), String> {
         // The symmetry plane's nodes are held in y: Eq. 21's block multigrid is the
         // constrained one (`DistOperator::held`).
         held_solver(dist, &format!("mpi: -n {n}"), drift);
+        far_field(&serial_far, &dist["far_field"], n, drift);
         quality_matches_file(&bin, &o, &report["quality_after"], n, drift)?;
     }
     pieces(&bin, &g, &grid, &serial, &out, drift)?;
@@ -400,6 +415,33 @@ pub(crate) fn example(
 /// Records a drift named `what` unless the distributed report `dist` names an Eq. 21
 /// solver with the constrained block multigrid (`…-held`, docs/mpi.md, "Preconditioner"),
 /// as a run with sliding nodes must.
+/// The distributed report's far field against the serial one's: the same distance and
+/// node count, the largest far displacement within [`REL`] of the moving markers' largest
+/// displacement (the node may differ between near-equal displacements).
+fn far_field(
+    serial: &serde_json::Value,
+    dist: &serde_json::Value,
+    n: usize,
+    drift: &mut Vec<String>,
+) {
+    let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+    let (ds, dd) = (f(serial, "distance"), f(dist, "distance"));
+    let (ns, nd) = (serial["nodes"].as_u64(), dist["nodes"].as_u64());
+    let scale = f(serial, "wall_max_displacement");
+    let gap = (f(serial, "max_displacement") - f(dist, "max_displacement")).abs() / scale;
+    println!(
+        "regress: mpi -n {n}: far field {nd:?} nodes at ≥ {dd:.6e} (serial {ns:?} at ≥ {ds:.6e}), largest displacement {:.6e} (serial {:.6e}, gap {gap:.2e} of the moving markers')",
+        f(dist, "max_displacement"),
+        f(serial, "max_displacement")
+    );
+    let same_distance = (ds - dd).abs() <= 1e-12 * ds.abs().max(1.0);
+    if ns.is_none() || ns != nd || !same_distance || gap.is_nan() || gap > REL {
+        drift.push(format!(
+            "mpi: -n {n}: far field {dist} against the serial {serial}"
+        ));
+    }
+}
+
 pub(crate) fn held_solver(dist: &serde_json::Value, what: &str, drift: &mut Vec<String>) {
     let solver = dist["solver"].as_str().unwrap_or("");
     if !solver.ends_with("-held") {

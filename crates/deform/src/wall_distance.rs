@@ -21,11 +21,22 @@ pub(crate) fn edge_distance(adj: &Adjacency, x: &[[f64; 3]], source: &[bool]) ->
 /// (Dijkstra seeded with those distances; [`edge_distance`] seeds the sources with 0, the
 /// distributed distance a rank's part with what the other ranks found).
 pub(crate) fn settle(adj: &Adjacency, x: &[[f64; 3]], d: &mut [f64]) {
+    let seeds: Vec<u32> = (0..d.len() as u32)
+        .filter(|&i| d[i as usize].is_finite())
+        .collect();
+    settle_from(adj, x, d, &seeds);
+}
+
+/// [`settle`] seeded with the nodes `seeds` only: the distances of a settled field after
+/// some of them were lowered (`seeds`), the others' being already the smallest over their
+/// neighbours. The same fixed point as [`settle`], for the work of the nodes it lowers.
+pub(crate) fn settle_from(adj: &Adjacency, x: &[[f64; 3]], d: &mut [f64], seeds: &[u32]) {
     let mut heap = RadixHeap::default();
-    for (i, v) in d.iter().enumerate() {
+    for &i in seeds {
+        let v = d[i as usize];
         if v.is_finite() {
             // Non-negative f64 bit patterns order like the values.
-            heap.push(v.to_bits(), i as u32);
+            heap.push(v.to_bits(), i);
         }
     }
     while let Some((key, i)) = heap.pop() {

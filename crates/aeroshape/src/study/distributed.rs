@@ -489,7 +489,10 @@ impl<'c> DistributedStudy<'c> {
                     quality_before: self.quality_before,
                     quality_after: Quality::of(&cell_quality),
                     wall_support_rel: self.wall_support(&geometry, &surface, &grid),
-                    far_field_max_displacement: if d.is_none() { 0.0 } else { f64::NAN },
+                    far_field_max_displacement: match d {
+                        Some((rep, _)) => rep.far_field.map_or(f64::NAN, |f| f.max_displacement),
+                        None => 0.0,
+                    },
                 };
                 Some(RootEvaluation {
                     grid,

@@ -28,7 +28,7 @@ use crate::assembly::{System, rhs};
 use crate::bc::{BoundaryConditions, NodeRole};
 use crate::error::{Error, Result};
 use crate::operator::check_converged;
-use crate::options::{DeformOptions, SolverKind};
+use crate::options::{DeformOptions, SolverKind, reach_weight};
 use crate::sliding::SlideOutcome;
 use crate::stiffness::{Stiffness, length_scale, springs};
 use crate::support::{Support, Supports};
@@ -87,6 +87,9 @@ pub struct Deformer<'c> {
     slide: Option<Slide>,
     /// The weight φ of R per local node (the reach of R; empty: 1 everywhere).
     reach: Vec<f64>,
+    /// The distance of every local node from the moving boundary along grid edges on the
+    /// baseline grid, for the far-field report (empty for a given partition).
+    wall_distance: Vec<f64>,
     /// Deformations run on this set-up.
     runs: std::cell::Cell<usize>,
     /// The coarse space, made at the first deformation and kept (it depends on the
@@ -170,12 +173,19 @@ impl<'c> Deformer<'c> {
         Self::set_up(comm, local, opts, t).map(Self::with_reach)
     }
 
-    /// Sets the weights of the reach of R, when the options give a finite one (collective).
+    /// The distance of the local nodes from the moving boundary along grid edges, as the
+    /// serial set-up's, and from it the weights of the reach of R when the options give a
+    /// finite one; a part made on rank 0 only, whose moving boundary rank 0 found on the
+    /// whole grid (collective).
     fn with_reach(mut self) -> Self {
+        let t = Instant::now();
+        let (comm, local) = (self.comm, &self.local);
+        let d = super::wall::boundary_distance(comm, &local.part, &local.root_boundary);
         if let Some(l) = self.opts.rotation_reach.filter(|l| l.is_finite()) {
-            let (comm, local) = (self.comm, &self.local);
-            self.reach = super::wall::reach_weights(comm, &local.part, &local.root_boundary, l);
+            self.reach = d.iter().map(|&d| reach_weight(d, l)).collect();
         }
+        self.wall_distance = d;
+        self.setup += max(comm, t.elapsed().as_secs_f64());
         self
     }
 
@@ -294,6 +304,7 @@ impl<'c> Deformer<'c> {
             overlap: true,
             slide: None,
             reach: Vec::new(),
+            wall_distance: Vec::new(),
             runs: std::cell::Cell::new(0),
             coarse: std::cell::OnceCell::new(),
             base: std::cell::RefCell::new(None),
@@ -551,6 +562,8 @@ impl<'c> Deformer<'c> {
             if inc == 1 {
                 state.params = params;
             }
+            rep.far_field = (!self.wall_distance.is_empty())
+                .then(|| super::wall::far_field(comm, &self.local.part, &self.wall_distance, &cur));
             let s = &mut rep.seconds;
             [s.assemble, s.rotation, s.solve, s.quality] =
                 [s.assemble, s.rotation, s.solve, s.quality].map(|v| max(comm, v));

@@ -64,6 +64,10 @@ pub struct DistReport {
     /// displacements: from the second on, the set-up and partition seconds are those of the
     /// first, not spent again).
     pub deformations: usize,
+    /// The far field, as the serial report's (`DeformReport::far_field`; the node by its
+    /// number in the whole grid); None for a partition given by the caller, whose moving
+    /// boundary no rank sees whole.
+    pub far_field: Option<crate::report::FarField>,
 }
 
 /// Seconds per phase (largest over the ranks).

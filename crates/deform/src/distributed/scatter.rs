@@ -46,8 +46,9 @@ pub(crate) struct Local {
     /// finds them (whole-grid numbering); empty elsewhere. Their roles are sent as free:
     /// `super::slide` hands each owner its own.
     pub root_supports: Vec<SupNode>,
-    /// On rank 0 with a finite reach of R, the moving boundary of the serial deformation
-    /// (`crate::deformer::moving_boundary`, whole-grid numbering); empty otherwise.
+    /// On rank 0 of a partition made there, the moving boundary of the serial deformation
+    /// (`crate::deformer::moving_boundary`, whole-grid numbering): what the reach of R and
+    /// the far-field report measure from; empty otherwise.
     pub root_boundary: Vec<bool>,
     /// For a part given by the caller: the renumbering of its nodes into this share's
     /// (`perm[caller's local node] = local node`; the owned nodes in the serial solver's
@@ -154,9 +155,7 @@ impl Local {
                 })?;
                 let mut cls = classify(m, bc, opts.plane_rel_tol, sup)?;
                 root_supports = std::mem::take(&mut cls.supports);
-                if opts.rotation_reach.is_some_and(f64::is_finite) {
-                    root_boundary = crate::deformer::moving_boundary(m, bc, &cls);
-                }
+                root_boundary = crate::deformer::moving_boundary(m, bc, &cls);
                 // The nodes along a Morton curve: METIS's graph and each part are built
                 // in that order (from nearby memory; a Gmsh grid's order is scattered).
                 let morton = order::morton_order(&m.coords);

@@ -11,12 +11,19 @@
 //!   d_j + l_ij over its neighbours (its owner has every edge of it), the shortest path's
 //!   sums in the same order, whatever the order in which nodes are settled. ℓ is 0.2 × the
 //!   diagonal of the moving nodes' bounding box over the ranks.
+//!
+//! And the fields measured from the moving boundary on the baseline grid: its distance
+//! along edges ([`boundary_distance`], for the reach of R and the far field) and the
+//! far-field report ([`far_field`]).
+
+use mpi::traits::*;
 
 use super::comm::{Comm, broadcast_vec, max, min, sum_n, sum_u64};
 use super::partition::Partition;
 use crate::bc::NodeRole;
+use crate::report::FarField;
 use crate::stiffness::{NodeVolumes, Springs, Stiffness, WALL_SCALE, mean_volume};
-use crate::wall_distance::settle;
+use crate::wall_distance::settle_from;
 
 /// True when this rank counts the cell `e`: it owns the cell's node of smallest global id.
 fn counted(part: &Partition, e: &[u32]) -> bool {
@@ -95,29 +102,36 @@ pub(crate) fn edge_distance(
         .iter()
         .map(|&s| [if s { 0.0 } else { f64::INFINITY }])
         .collect();
+    // Each round settles from the nodes the last exchange lowered (the first from all):
+    // the rest of the part is settled already.
+    let mut flat: Vec<f64> = d.iter().map(|v| v[0]).collect();
+    let mut seeds: Vec<u32> = (0..flat.len() as u32).collect();
     loop {
-        let before: Vec<u64> = d.iter().map(|v| v[0].to_bits()).collect();
-        let mut flat: Vec<f64> = d.iter().map(|v| v[0]).collect();
-        settle(&part.adj, x, &mut flat);
-        for (v, f) in d.iter_mut().zip(flat) {
+        settle_from(&part.adj, x, &mut flat, &seeds);
+        for (v, &f) in d.iter_mut().zip(&flat) {
             v[0] = f;
         }
         part.halo.exchange(comm, &mut d);
-        let changed = d.iter().zip(&before).any(|(v, &b)| v[0].to_bits() != b);
-        if sum_u64(comm, u64::from(changed)) == 0 {
+        seeds.clear();
+        for (i, (v, f)) in d.iter().zip(&mut flat).enumerate() {
+            if v[0].to_bits() != f.to_bits() {
+                *f = v[0];
+                seeds.push(i as u32);
+            }
+        }
+        if sum_u64(comm, seeds.len() as u64) == 0 {
             break;
         }
     }
-    d.into_iter().map(|v| v[0]).collect()
+    flat
 }
 
-/// The weight φ of R per local node for the reach `reach` ([`crate::options::reach_weight`]
-/// of the distance from the moving boundary along grid edges, on the baseline grid, as the
-/// serial set-up): rank 0's moving boundary `root` (whole-grid numbering, read on rank 0
-/// only) is broadcast as global ids, each rank flags its local nodes and the distance is
-/// [`edge_distance`] over the ranks. Collective.
-pub(crate) fn reach_weights(comm: &Comm, part: &Partition, root: &[bool], reach: f64) -> Vec<f64> {
-    use mpi::traits::*;
+/// The distance of every local node from the moving boundary along grid edges, on the
+/// baseline grid, as the serial set-up's (`Deformer::wall_distance`): rank 0's moving
+/// boundary `root` (whole-grid numbering, read on rank 0 only) is broadcast as global ids,
+/// each rank flags its local nodes and the distance is [`edge_distance`] over the ranks.
+/// Collective.
+pub(crate) fn boundary_distance(comm: &Comm, part: &Partition, root: &[bool]) -> Vec<f64> {
     let ids: Vec<u64> = if comm.rank() == 0 {
         (0..root.len() as u64)
             .filter(|&g| root[g as usize])
@@ -140,7 +154,70 @@ pub(crate) fn reach_weights(comm: &Comm, part: &Partition, root: &[bool], reach:
         }
     }
     edge_distance(comm, part, &g.mesh.coords, &source)
-        .into_iter()
-        .map(|d| crate::options::reach_weight(d, reach))
-        .collect()
+}
+
+/// The far-field report of the local coordinates `cur` (as the serial
+/// `Deformer::far_field`: the largest displacement among the nodes at least the moving
+/// boundary's bounding-box diagonal away from it along grid edges), over the ranks, from
+/// each local node's distance `wall_distance` from the moving boundary
+/// ([`boundary_distance`]); the node by its global id (the whole grid's number).
+/// Collective.
+pub(crate) fn far_field(
+    comm: &Comm,
+    part: &Partition,
+    wall_distance: &[f64],
+    cur: &[[f64; 3]],
+) -> FarField {
+    let (x0, n_owned) = (&part.grid.mesh.coords, part.grid.n_owned);
+    let disp = |i: usize| {
+        let (a, b) = (x0[i], cur[i]);
+        ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    let mut wall_max = 0.0f64;
+    for (i, &d) in wall_distance[..n_owned].iter().enumerate() {
+        if d == 0.0 {
+            for q in 0..3 {
+                lo[q] = lo[q].min(x0[i][q]);
+                hi[q] = hi[q].max(x0[i][q]);
+            }
+            wall_max = wall_max.max(disp(i));
+        }
+    }
+    let (lo, hi) = (lo.map(|v| min(comm, v)), hi.map(|v| max(comm, v)));
+    let distance = if lo[0] <= hi[0] {
+        ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
+    } else {
+        0.0
+    };
+    // This rank's far nodes: their count and the largest displacement, the node of
+    // smallest global id among equals (the serial scan's first).
+    let mut nodes = 0u64;
+    let mut best: Option<(f64, u64)> = None;
+    for (i, &d) in wall_distance[..n_owned].iter().enumerate() {
+        if d >= distance {
+            nodes += 1;
+            let (u, g) = (disp(i), part.grid.global_ids[i]);
+            if best.is_none_or(|(bu, bg)| u > bu || (u == bu && g < bg)) {
+                best = Some((u, g));
+            }
+        }
+    }
+    let mine = best.map_or([f64::NEG_INFINITY, 0.0], |(u, g)| [u, g as f64]);
+    let mut all = vec![0.0f64; 2 * comm.size() as usize];
+    comm.all_gather_into(&mine[..], &mut all[..]);
+    let top = all
+        .chunks_exact(2)
+        .filter(|p| p[0] > f64::NEG_INFINITY)
+        .fold(None, |acc: Option<(f64, f64)>, p| match acc {
+            Some((u, g)) if u > p[0] || (u == p[0] && g <= p[1]) => Some((u, g)),
+            _ => Some((p[0], p[1])),
+        });
+    FarField {
+        distance,
+        nodes: sum_u64(comm, nodes) as usize,
+        max_displacement: top.map_or(0.0, |t| t.0),
+        node: top.map(|t| t.1 as u32),
+        wall_max_displacement: max(comm, wall_max),
+    }
 }
