@@ -330,26 +330,41 @@ fn print_summary(r: &deform::DeformReport, output: &Path) -> std::io::Result<()>
         r.increments,
         r.residual
     );
+    print_tail(
+        [&r.quality_before, &r.quality_after],
+        Some(&r.far_field),
+        output,
+    )
+}
+
+/// The summary's lines after its first, shared with the distributed command: the cell
+/// quality before and after, the far field (when measured) and the file written.
+pub(crate) fn print_tail(
+    q: [&mesh::quality::Summary; 2],
+    far: Option<&deform::FarField>,
+    output: &Path,
+) -> std::io::Result<()> {
     outln!(
         "quality min {:.4} → {:.4}, mean {:.4} → {:.4}, 1st percentile {:.4} → {:.4}, inverted {} → {}",
-        r.quality_before.min,
-        r.quality_after.min,
-        r.quality_before.mean,
-        r.quality_after.mean,
-        r.quality_before.p1,
-        r.quality_after.p1,
-        r.quality_before.n_nonpositive,
-        r.quality_after.n_nonpositive
+        q[0].min,
+        q[1].min,
+        q[0].mean,
+        q[1].mean,
+        q[0].p1,
+        q[1].p1,
+        q[0].n_nonpositive,
+        q[1].n_nonpositive
     );
-    let f = &r.far_field;
-    outln!(
-        "far field (≥ {:.3e} from the moving markers, {} nodes): largest displacement {:.3e}{}; moving markers {:.3e}",
-        f.distance,
-        f.nodes,
-        f.max_displacement,
-        f.node.map_or(String::new(), |v| format!(" (node {v})")),
-        f.wall_max_displacement
-    );
+    if let Some(f) = far {
+        outln!(
+            "far field (≥ {:.3e} from the moving markers, {} nodes): largest displacement {:.3e}{}; moving markers {:.3e}",
+            f.distance,
+            f.nodes,
+            f.max_displacement,
+            f.node.map_or(String::new(), |v| format!(" (node {v})")),
+            f.wall_max_displacement
+        );
+    }
     outln!("wrote {}", output.display());
     Ok(())
 }

@@ -185,6 +185,7 @@ fn deform_on(
                                 t_all,
                             )
                         })
+                        .and_then(|()| summary(m.cells.len(), dist, quality, &args.output))
                 }
                 _ => Ok(()),
             })
@@ -204,7 +205,8 @@ fn deform_on(
                     &out.report,
                     [seconds_read, t.elapsed().as_secs_f64()],
                     t_all,
-                )
+                )?;
+                summary(m.cells.len(), &out.report, out.quality, &args.output)
             }
             None => Ok(()),
         }),
@@ -276,6 +278,29 @@ fn write_pieces(
         );
     }
     Ok((0..world.size()).map(source).collect())
+}
+
+/// The summary printed by rank 0 on success, as the serial command's: sizes, ranks and
+/// partition, solver work, cell quality before and after, the far field, the file written.
+fn summary(
+    cells: usize,
+    r: &distributed::DistReport,
+    q: [mesh::quality::Summary; 2],
+    output: &std::path::Path,
+) -> anyhow::Result<()> {
+    outln!(
+        "{} nodes, {cells} cells on {} ranks ({}, {} ghost nodes); {} iterations ({} for R) in {} increment(s), residual {:.1e}",
+        r.nodes,
+        r.ranks,
+        r.partitioner,
+        r.ghost_nodes,
+        r.iterations,
+        r.rotation_iterations,
+        r.increments,
+        r.residual
+    );
+    crate::deform::print_tail([&q[0], &q[1]], r.far_field.as_ref(), output)?;
+    Ok(())
 }
 
 /// The report (rank 0), when asked for.
