@@ -71,16 +71,35 @@ fn deviation(x: &[[f64; 3]], serial: &[[f64; 3]], x0: &[[f64; 3]]) -> f64 {
     gap(x, serial) / gap(serial, x0)
 }
 
-/// The timed run on the grid file `path` (see the module's doc).
+/// The largest of `t` over the ranks.
+fn largest(world: &deform::distributed::Comm, t: f64) -> f64 {
+    let mut m = 0.0;
+    world.all_reduce_into(&t, &mut m, mpi::collective::SystemOperation::max());
+    m
+}
+
+/// The iterations of a result: Eq. 21's and Eq. 26's.
+fn iterations(o: &deform::distributed::DistDeformed) -> (usize, usize) {
+    (o.report.iterations, o.report.rotation_iterations)
+}
+
+/// The grid file `path`, read on every rank, and this rank's part of METIS's cut of it
+/// (the same cut on every rank).
+fn read_part(world: &deform::distributed::Comm, path: &str) -> Result<(Mesh, LocalGrid), String> {
+    let whole =
+        mesh::io::read_path(std::path::Path::new(path)).map_err(|e| format!("{path}: {e}"))?;
+    let size = world.size() as usize;
+    let cut =
+        deform::distributed::metis::cut(&whole, size, deform::distributed::Partitioner::Metis);
+    let grid = rcb::parts(&whole, &cut.part, size).swap_remove(world.rank() as usize);
+    Ok((whole, grid))
+}
+
 /// The `warm` mode on a grid file (see the module's doc); errors are one line.
 fn warm_file(world: &deform::distributed::Comm, path: &str, deg: f64) -> Result<(), String> {
     use std::time::Instant;
-    let (rank, size) = (world.rank(), world.size() as usize);
-    let whole =
-        mesh::io::read_path(std::path::Path::new(path)).map_err(|e| format!("{path}: {e}"))?;
-    let cut =
-        deform::distributed::metis::cut(&whole, size, deform::distributed::Partitioner::Metis);
-    let grid = rcb::parts(&whole, &cut.part, size).swap_remove(rank as usize);
+    let size = world.size() as usize;
+    let (whole, grid) = read_part(world, path)?;
     // The owned nodes of the moving markers, in local numbering, and their pitch.
     let mut nodes: Vec<u32> = ["wing", "fuselage"]
         .iter()
@@ -115,44 +134,38 @@ fn warm_file(world: &deform::distributed::Comm, path: &str, deg: f64) -> Result<
         ..DeformOptions::default()
     };
     let e = |e: deform::Error| e.to_string();
-    let largest = |t: f64| {
-        let mut m = 0.0;
-        world.all_reduce_into(&t, &mut m, mpi::collective::SystemOperation::max());
-        m
-    };
     let near = pitch(1.05 * deg);
     let d = Deformer::new(world, grid.clone(), &bc, &opts).map_err(e)?;
     let timed = |f: &dyn Fn() -> deform::Result<deform::distributed::DistDeformed>| {
         let t = Instant::now();
         let out = f().map_err(e)?;
-        Ok::<_, String>((largest(t.elapsed().as_secs_f64()), out))
+        Ok::<_, String>((largest(world, t.elapsed().as_secs_f64()), out))
     };
     let (t1, first) = timed(&|| d.deform())?;
     let (t_cold, cold) = timed(&|| d.deform_with(Some(&near)))?;
     let (t_warm, warm) = timed(&|| d.deform_from(Some(&near), Some(&first)))?;
-    let it =
-        |o: &deform::distributed::DistDeformed| (o.report.iterations, o.report.rotation_iterations);
     let (xc, xw) = (d.gather(&cold.coords), d.gather(&warm.coords));
     if let (Some(xc), Some(xw)) = (xc, xw) {
         let dev = deviation(&xw, &xc, &whole.coords);
         println!(
             "{size} ranks, warm start on {} nodes: first design {t1:.2} s {:?}; design 5 % further from zero {t_cold:.2} s {:?}, from the first's solutions {t_warm:.2} s {:?}; deviation {dev:.3e}",
             first.report.nodes,
-            it(&first),
-            it(&cold),
-            it(&warm)
+            iterations(&first),
+            iterations(&cold),
+            iterations(&warm)
         );
     }
     Ok(())
 }
 
+/// The timed run on the grid file `path` (see the module's doc).
 fn from_file(world: &deform::distributed::Comm, path: &str, deg: f64) -> ExitCode {
     use std::time::Instant;
     let (rank, size) = (world.rank(), world.size() as usize);
-    let whole = match mesh::io::read_path(std::path::Path::new(path)) {
-        Ok(m) => m,
+    let (whole, grid) = match read_part(world, path) {
+        Ok(p) => p,
         Err(e) => {
-            eprintln!("error: {path}: {e}");
+            eprintln!("error: {e}");
             return ExitCode::from(1);
         }
     };
@@ -172,26 +185,18 @@ fn from_file(world: &deform::distributed::Comm, path: &str, deg: f64) -> ExitCod
         rel_tol: 1e-11,
         ..DeformOptions::default()
     };
-    let cut =
-        deform::distributed::metis::cut(&whole, size, deform::distributed::Partitioner::Metis);
-    let grid = rcb::parts(&whole, &cut.part, size).swap_remove(rank as usize);
     world.barrier();
-    let largest = |t: f64| {
-        let mut m = 0.0;
-        world.all_reduce_into(&t, &mut m, mpi::collective::SystemOperation::max());
-        m
-    };
     // The seconds of Deformer::new and deform together, and the gathered grid on rank 0.
     let run = || -> deform::Result<Option<(f64, Vec<[f64; 3]>)>> {
         let t = Instant::now();
         let d = Deformer::new(world, grid, &bc, &opts)?;
-        let t_new = largest(t.elapsed().as_secs_f64());
+        let t_new = largest(world, t.elapsed().as_secs_f64());
         let t = Instant::now();
         let out = d.deform()?;
-        let t_deform = largest(t.elapsed().as_secs_f64());
+        let t_deform = largest(world, t.elapsed().as_secs_f64());
         let t = Instant::now();
         d.deform_with(None)?;
-        let t_again = largest(t.elapsed().as_secs_f64());
+        let t_again = largest(world, t.elapsed().as_secs_f64());
         if rank == 0 {
             println!(
                 "{size} ranks, given partition: {} nodes, {} + {} iterations, Deformer::new {t_new:.2} s, deform {t_deform:.2} s, together {:.2} s; deform again on the set-up {t_again:.2} s",
@@ -323,9 +328,7 @@ fn reuse(world: &deform::distributed::Comm, n: usize) -> Result<(), String> {
         .deform_from(Some(&values3), Some(&second))
         .map_err(e)?;
     let again = set_up.deform_from(Some(&values3), Some(&warm)).map_err(e)?;
-    let iters =
-        |o: &deform::distributed::DistDeformed| (o.report.iterations, o.report.rotation_iterations);
-    let (cold_it, warm_it, again_it) = (iters(&cold), iters(&warm), iters(&again));
+    let (cold_it, warm_it, again_it) = (iterations(&cold), iterations(&warm), iterations(&again));
     if size > 1 {
         let one = set_up.deform_from(Some(&values2), root.then_some(&first));
         match one {

@@ -489,48 +489,23 @@ impl<'s> Deformer<'s> {
     /// displacement from the baseline among the nodes at least the moving boundary's
     /// bounding-box diagonal away from it ([`FarField`]).
     fn far_field(&self, coords: &[[f64; 3]]) -> FarField {
-        let x0 = &self.mesh.coords;
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        let mut wall_max = 0.0f64;
-        let disp = |i: usize| {
-            let (a, b) = (x0[i], coords[i]);
-            ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
-        };
-        for (i, &d) in self.wall_distance.iter().enumerate() {
-            if d == 0.0 {
-                for q in 0..3 {
-                    lo[q] = lo[q].min(x0[i][q]);
-                    hi[q] = hi[q].max(x0[i][q]);
-                }
-                wall_max = wall_max.max(disp(i));
-            }
-        }
-        let distance = if lo[0] <= hi[0] {
-            ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
-        } else {
-            0.0
-        };
-        let mut out = FarField {
+        let (x0, d) = (&self.mesh.coords, &self.wall_distance);
+        let (lo, hi, wall_max) = FarField::moving(x0, coords, d);
+        let distance = FarField::diagonal(lo, hi);
+        let (nodes, top) = FarField::far(x0, coords, d, distance);
+        FarField {
             distance,
-            wall_max_displacement: wall_max,
-            ..FarField::default()
-        };
-        for (i, &d) in self.wall_distance.iter().enumerate() {
-            // A node no moving node reaches (∞) is far too.
-            if d >= distance {
-                out.nodes += 1;
-                let u = disp(i);
-                if out.node.is_none() || u > out.max_displacement {
-                    out.max_displacement = u;
-                    out.node = Some(if self.perm.is_some() {
-                        self.inv[i]
-                    } else {
-                        i as u32
-                    });
+            nodes,
+            max_displacement: top.map_or(0.0, |t| t.1),
+            node: top.map(|(i, _)| {
+                if self.perm.is_some() {
+                    self.inv[i]
+                } else {
+                    i as u32
                 }
-            }
+            }),
+            wall_max_displacement: wall_max,
         }
-        out
     }
 
     fn run(

@@ -139,3 +139,56 @@ pub struct FarField {
     /// Largest displacement of a moving node (prescribed motion), for scale.
     pub wall_max_displacement: f64,
 }
+
+impl FarField {
+    /// The moving nodes (distance 0 in `d`, the nodes' distances from the moving boundary)
+    /// of the nodes `x0` moved to `x`: their bounding box on `x0` (`lo`, `hi`; empty when
+    /// `lo > hi`) and their largest displacement.
+    pub(crate) fn moving(x0: &[[f64; 3]], x: &[[f64; 3]], d: &[f64]) -> ([f64; 3], [f64; 3], f64) {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        let mut largest = 0.0f64;
+        for (i, _) in d.iter().enumerate().filter(|e| *e.1 == 0.0) {
+            for q in 0..3 {
+                lo[q] = lo[q].min(x0[i][q]);
+                hi[q] = hi[q].max(x0[i][q]);
+            }
+            largest = largest.max(distance(x0[i], x[i]));
+        }
+        (lo, hi, largest)
+    }
+
+    /// The diagonal of the box `lo`–`hi` ([`FarField::moving`]); 0 for an empty box.
+    pub(crate) fn diagonal(lo: [f64; 3], hi: [f64; 3]) -> f64 {
+        if lo[0] <= hi[0] {
+            distance(lo, hi)
+        } else {
+            0.0
+        }
+    }
+
+    /// The far nodes (distance in `d` at least `from`; a node no moving node reaches, ∞,
+    /// included) of the nodes `x0` moved to `x`: their count, and the first of them with
+    /// the largest displacement with that displacement.
+    pub(crate) fn far(
+        x0: &[[f64; 3]],
+        x: &[[f64; 3]],
+        d: &[f64],
+        from: f64,
+    ) -> (usize, Option<(usize, f64)>) {
+        let mut nodes = 0;
+        let mut top: Option<(usize, f64)> = None;
+        for (i, _) in d.iter().enumerate().filter(|e| *e.1 >= from) {
+            nodes += 1;
+            let u = distance(x0[i], x[i]);
+            if top.is_none_or(|t| u > t.1) {
+                top = Some((i, u));
+            }
+        }
+        (nodes, top)
+    }
+}
+
+/// |b − a|.
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
+}

@@ -499,12 +499,10 @@ impl<'c> Deformer<'c> {
             rep.attempts.push(inc);
             let mut cur = x0.clone();
             let warm = warm.filter(|_| inc == 1);
-            let mut params = match (slide, warm) {
-                (Some(sl), Some(w)) if w.params.len() == sl.initial_params().len() => {
-                    w.params.clone()
-                }
-                (sl, _) => sl.map_or_else(Vec::new, Slide::initial_params),
-            };
+            let mut params = slide.map_or_else(Vec::new, Slide::initial_params);
+            if let Some(w) = warm.filter(|w| w.params.len() == params.len()) {
+                params.clone_from(&w.params);
+            }
             let mut state = DistState {
                 unknowns: self.sys.node_of.len(),
                 ..DistState::default()

@@ -168,42 +168,16 @@ pub(crate) fn far_field(
     wall_distance: &[f64],
     cur: &[[f64; 3]],
 ) -> FarField {
-    let (x0, n_owned) = (&part.grid.mesh.coords, part.grid.n_owned);
-    let disp = |i: usize| {
-        let (a, b) = (x0[i], cur[i]);
-        ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
-    };
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    let mut wall_max = 0.0f64;
-    for (i, &d) in wall_distance[..n_owned].iter().enumerate() {
-        if d == 0.0 {
-            for q in 0..3 {
-                lo[q] = lo[q].min(x0[i][q]);
-                hi[q] = hi[q].max(x0[i][q]);
-            }
-            wall_max = wall_max.max(disp(i));
-        }
-    }
+    let n = part.grid.n_owned;
+    let (x0, x, d) = (&part.grid.mesh.coords[..n], &cur[..n], &wall_distance[..n]);
+    let (lo, hi, wall_max) = FarField::moving(x0, x, d);
     let (lo, hi) = (lo.map(|v| min(comm, v)), hi.map(|v| max(comm, v)));
-    let distance = if lo[0] <= hi[0] {
-        ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
-    } else {
-        0.0
-    };
-    // This rank's far nodes: their count and the largest displacement, the node of
-    // smallest global id among equals (the serial scan's first).
-    let mut nodes = 0u64;
-    let mut best: Option<(f64, u64)> = None;
-    for (i, &d) in wall_distance[..n_owned].iter().enumerate() {
-        if d >= distance {
-            nodes += 1;
-            let (u, g) = (disp(i), part.grid.global_ids[i]);
-            if best.is_none_or(|(bu, bg)| u > bu || (u == bu && g < bg)) {
-                best = Some((u, g));
-            }
-        }
-    }
-    let mine = best.map_or([f64::NEG_INFINITY, 0.0], |(u, g)| [u, g as f64]);
+    let distance = FarField::diagonal(lo, hi);
+    let (nodes, top) = FarField::far(x0, x, d, distance);
+    // The largest over the ranks; among equal ones, the smallest global id.
+    let mine = top.map_or([f64::NEG_INFINITY, 0.0], |(i, u)| {
+        [u, part.grid.global_ids[i] as f64]
+    });
     let mut all = vec![0.0f64; 2 * comm.size() as usize];
     comm.all_gather_into(&mine[..], &mut all[..]);
     let top = all
@@ -215,7 +189,7 @@ pub(crate) fn far_field(
         });
     FarField {
         distance,
-        nodes: sum_u64(comm, nodes) as usize,
+        nodes: sum_u64(comm, nodes as u64) as usize,
         max_displacement: top.map_or(0.0, |t| t.0),
         node: top.map(|t| t.1 as u32),
         wall_max_displacement: max(comm, wall_max),
