@@ -7,6 +7,9 @@
 //! ghost node (and its cells) from rank 1's part, `duplicate-id` gives rank 1's first owned
 //! node the global id of rank 0's; both must fail on every rank with one clear line and exit
 //! status 1, never hang. Prints `max deviation ... relative` and fails when it exceeds 1e-8.
+//! In `ok` mode, the report's far field must be the serial one, and a second set-up with a
+//! reach of R (each owner finding the moving boundary among its nodes) must lie within 1e-8
+//! of the serial result with the same reach, which must differ from the full R's.
 //!
 //! `mpirun -n N distributed CELLS reuse`: one set-up, two designs, as an optimiser's loop
 //! has them: the wing's nodes displaced (a pitch of -2°, then of -5°, as node
@@ -42,6 +45,9 @@ use deform::distributed::mpi::traits::*;
 use deform::distributed::{Deformer, LocalGrid, mpi, rcb};
 use deform::{BoundaryConditions, DeformOptions, MarkerRole};
 use mesh::Mesh;
+
+/// The reach of R of the `ok` mode's second run (the wing-in-box's chord is 1).
+const REACH: f64 = 0.5;
 
 /// The part of rank `r` with local node `v` and its cells removed.
 fn drop_node(g: &mut LocalGrid, v: u32) {
@@ -474,8 +480,14 @@ fn main() -> ExitCode {
         }
     }
     let run = || -> deform::Result<Option<f64>> {
-        let d = Deformer::new(&world, grid, &bc, &opts)?;
+        let d = Deformer::new(&world, grid.clone(), &bc, &opts)?;
         let out = d.deform()?;
+        // The reach of R on the given part: the moving boundary found by each owner.
+        let reach = DeformOptions {
+            rotation_reach: Some(REACH),
+            ..opts
+        };
+        let near = Deformer::new(&world, grid, &bc, &reach)?.deform()?;
         if rank == 0 {
             println!(
                 "{} ranks: {} nodes, {} iterations (R: {}), {} bytes per iteration, {} ghost nodes",
@@ -487,10 +499,29 @@ fn main() -> ExitCode {
                 out.report.ghost_nodes
             );
         }
+        let near_x = d.gather(&near.coords);
         let Some(x) = d.gather(&out.coords) else {
             return Ok(None);
         };
         let serial = deform::deform(&whole, &bc, &opts)?;
+        let serial_near = deform::deform(&whole, &bc, &reach)?;
+        let near_x = near_x.unwrap_or_default();
+        let near_dev = deviation(&near_x, &serial_near.coords, &whole.coords);
+        let effect = gap(&serial_near.coords, &serial.coords) / gap(&serial.coords, &whole.coords);
+        let (fd, fs) = (out.report.far_field, serial.report.far_field);
+        println!(
+            "reach of R {REACH}: {near_dev:.3e} from serial (the reach moves the serial grid by {effect:.3e}); \
+             far field {fd:?}, serial {fs:?}"
+        );
+        let far = fd.is_some_and(|f| {
+            (f.distance, f.nodes, f.node) == (fs.distance, fs.nodes, fs.node)
+                && (f.max_displacement - fs.max_displacement).abs()
+                    <= 1e-8 * fs.wall_max_displacement
+        });
+        if !(near_dev <= 1e-8 && effect > 1e-6 && far && fs.nodes > 0) {
+            eprintln!("error: the reach of R or the far field differ from serial");
+            return Ok(Some(f64::INFINITY));
+        }
         Ok(Some(deviation(&x, &serial.coords, &whole.coords)))
     };
     match run() {

@@ -14,7 +14,7 @@ use mpi::traits::*;
 use sparse::{Constraints, V3};
 
 use super::coarse::{CoarseOp, CoarseSpace};
-use super::comm::{Comm, agree, max, min, offsets, sum_u64};
+use super::comm::{Comm, agree, max, min, offsets, sum_n, sum_u64};
 use super::halo::Halo;
 use super::metis::Partitioner;
 use super::partition::{LocalGrid, Partition, locality_order};
@@ -88,8 +88,8 @@ pub struct Deformer<'c> {
     /// The weight φ of R per local node (the reach of R; empty: 1 everywhere).
     reach: Vec<f64>,
     /// The distance of every local node from the moving boundary along grid edges on the
-    /// baseline grid, for the far-field report (empty for a given partition).
-    wall_distance: Vec<f64>,
+    /// baseline grid, for the far-field report (the same `Some` or `None` on every rank).
+    wall_distance: Option<Vec<f64>>,
     /// Deformations run on this set-up.
     runs: std::cell::Cell<usize>,
     /// The coarse space, made at the first deformation and kept (it depends on the
@@ -127,7 +127,9 @@ fn counted_cells(part: &Partition) -> Mesh {
 impl<'c> Deformer<'c> {
     /// The set-up on a partition given by the caller (each rank its own part, as a CFD
     /// solver has it): `bc` names markers of the local grids (rigid or fixed) and node
-    /// displacements in local numbering. Collective.
+    /// displacements in local numbering. Each rank's part must hold every boundary
+    /// element of its owned nodes (its roles, the reach of R and the far field are found
+    /// from them). Collective.
     pub fn new(
         comm: &'c Comm,
         grid: LocalGrid,
@@ -135,17 +137,9 @@ impl<'c> Deformer<'c> {
         opts: &DeformOptions,
     ) -> Result<Self> {
         check_options(comm, opts)?;
-        if let Some(reach) = opts.rotation_reach.filter(|r| r.is_finite()) {
-            return Err(Error::Distributed {
-                rank: comm.rank(),
-                reason: format!(
-                    "rotation reach {reach} needs the partition made on rank 0 (the moving boundary is found on the whole grid); leave it unset (full R)"
-                ),
-            });
-        }
         let t = Instant::now();
         let local = Local::given(comm, grid, bc, opts)?;
-        Self::set_up(comm, local, opts, t)
+        Self::set_up(comm, local, opts, t).map(Self::with_reach)
     }
 
     /// The set-up from the whole grid on rank 0 (`whole`: `Some` on rank 0, `None` on the
@@ -175,16 +169,17 @@ impl<'c> Deformer<'c> {
 
     /// The distance of the local nodes from the moving boundary along grid edges, as the
     /// serial set-up's, and from it the weights of the reach of R when the options give a
-    /// finite one; a part made on rank 0 only, whose moving boundary rank 0 found on the
-    /// whole grid (collective).
+    /// finite one (collective). The moving boundary is the serial one: on a part made on
+    /// rank 0, found there on the whole grid; on a given part, by each owner among its own
+    /// nodes, from its own boundary elements.
     fn with_reach(mut self) -> Self {
         let t = Instant::now();
         let (comm, local) = (self.comm, &self.local);
-        let d = super::wall::boundary_distance(comm, &local.part, &local.root_boundary);
+        let d = super::wall::moving_distance(comm, local);
         if let Some(l) = self.opts.rotation_reach.filter(|l| l.is_finite()) {
             self.reach = d.iter().map(|&d| reach_weight(d, l)).collect();
         }
-        self.wall_distance = d;
+        self.wall_distance = Some(d);
         self.setup += max(comm, t.elapsed().as_secs_f64());
         self
     }
@@ -304,7 +299,7 @@ impl<'c> Deformer<'c> {
             overlap: true,
             slide: None,
             reach: Vec::new(),
-            wall_distance: Vec::new(),
+            wall_distance: None,
             runs: std::cell::Cell::new(0),
             coarse: std::cell::OnceCell::new(),
             base: std::cell::RefCell::new(None),
@@ -424,34 +419,39 @@ impl<'c> Deformer<'c> {
         displacements: Option<&[[f64; 3]]>,
         warm_start: Option<&DistDeformed>,
     ) -> Result<DistDeformed> {
-        let has = f64::from(u8::from(warm_start.is_some()));
+        // One all-reduce: the ranks that give a warm start, those whose warm start fits,
+        // and (on a given partition, whose values are per rank) those that give values.
+        let flag = |b: bool| f64::from(u8::from(b));
         let fits = warm_start.is_none_or(|w| w.state.unknowns == self.sys.node_of.len());
-        if min(self.comm, has) != max(self.comm, has) {
+        let given = self.local.caller.is_some();
+        let [has, fit, values] = sum_n(
+            self.comm,
+            [
+                flag(warm_start.is_some()),
+                flag(fits),
+                flag(given && displacements.is_some()),
+            ],
+        );
+        let all = f64::from(self.comm.size());
+        let split = |n: f64| n != 0.0 && n != all;
+        let mismatch = if split(has) {
+            Some("some ranks gave a warm start and others none")
+        } else if fit != all {
+            Some("the warm start is a result of another set-up")
+        } else if split(values) {
+            Some("some ranks gave new displacements and others none")
+        } else {
+            None
+        };
+        if let Some(reason) = mismatch {
             return Err(Error::Distributed {
                 rank: self.comm.rank(),
-                reason: "some ranks gave a warm start and others none".into(),
-            });
-        }
-        if min(self.comm, f64::from(u8::from(fits))) == 0.0 {
-            return Err(Error::Distributed {
-                rank: self.comm.rank(),
-                reason: "the warm start is a result of another set-up".into(),
+                reason: reason.into(),
             });
         }
         let warm = warm_start.map(|w| &w.state);
-        let given = self.local.caller.is_some();
         let new = if given {
-            let given = displacements.is_some();
-            // The ranks agree on whether the values are new (a given part's are per rank).
-            if min(self.comm, f64::from(u8::from(given)))
-                != max(self.comm, f64::from(u8::from(given)))
-            {
-                return Err(Error::Distributed {
-                    rank: self.comm.rank(),
-                    reason: "some ranks gave new displacements and others none".into(),
-                });
-            }
-            given
+            values > 0.0
         } else {
             let mut on_root = u64::from(displacements.is_some());
             self.comm.process_at_rank(0).broadcast_into(&mut on_root);
@@ -560,8 +560,10 @@ impl<'c> Deformer<'c> {
             if inc == 1 {
                 state.params = params;
             }
-            rep.far_field = (!self.wall_distance.is_empty())
-                .then(|| super::wall::far_field(comm, &self.local.part, &self.wall_distance, &cur));
+            rep.far_field = self
+                .wall_distance
+                .as_ref()
+                .map(|d| super::wall::far_field(comm, &self.local.part, d, &cur));
             let s = &mut rep.seconds;
             [s.assemble, s.rotation, s.solve, s.quality] =
                 [s.assemble, s.rotation, s.solve, s.quality].map(|v| max(comm, v));

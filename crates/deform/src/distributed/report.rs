@@ -65,8 +65,7 @@ pub struct DistReport {
     /// first, not spent again).
     pub deformations: usize,
     /// The far field, as the serial report's (`DeformReport::far_field`; the node by its
-    /// number in the whole grid); None for a partition given by the caller, whose moving
-    /// boundary no rank sees whole.
+    /// number in the whole grid: its global id on a given partition).
     pub far_field: Option<crate::report::FarField>,
 }
 

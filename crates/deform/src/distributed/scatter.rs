@@ -50,6 +50,11 @@ pub(crate) struct Local {
     /// (`crate::deformer::moving_boundary`, whole-grid numbering): what the reach of R and
     /// the far-field report measure from; empty otherwise.
     pub root_boundary: Vec<bool>,
+    /// For a part given by the caller, the moving boundary of the serial deformation among
+    /// the local nodes: each owner flags its owned nodes from its own boundary elements (it
+    /// has every boundary element of its nodes), the ghosts take their owners' flags; empty
+    /// for a part made on rank 0.
+    pub given_boundary: Vec<bool>,
     /// For a part given by the caller: the renumbering of its nodes into this share's
     /// (`perm[caller's local node] = local node`; the owned nodes in the serial solver's
     /// order for locality, the ghosts kept in place). None for a part made on rank 0,
@@ -108,6 +113,11 @@ impl Local {
         let before = cls.roles.clone();
         owners_roles(comm, &part, &mut cls, &mut disp);
         displaced_skin(&part.grid.mesh, bc, &before, &mut cls);
+        let given_boundary = owners_flags(
+            comm,
+            &part,
+            crate::deformer::moving_boundary(&part.grid.mesh, bc, &cls),
+        );
         Ok(Self {
             part,
             cls,
@@ -118,6 +128,7 @@ impl Local {
             partition_threads: 0,
             root_supports: Vec::new(),
             root_boundary: Vec::new(),
+            given_boundary,
             caller: Some(perm),
             own_seconds: t.elapsed().as_secs_f64(),
         })
@@ -226,6 +237,7 @@ impl Local {
             made_by: MADE_BY.get(how as usize - 1).copied().unwrap_or("?"),
             root_supports,
             root_boundary,
+            given_boundary: Vec::new(),
             caller: None,
             own_seconds: t.elapsed().as_secs_f64(),
         })
@@ -339,6 +351,13 @@ fn displaced_skin(mesh: &Mesh, bc: &BoundaryConditions, before: &[NodeRole], cls
     };
     let new = |e: &[u32]| !all_displaced(before, e);
     push_displaced_skin(mesh, rigid, &cls.roles, new, &mut cls.skin);
+}
+
+/// The local nodes' `flags` with the ghosts' replaced by their owners' (collective).
+fn owners_flags(comm: &Comm, part: &Partition, flags: Vec<bool>) -> Vec<bool> {
+    let mut v: Vec<[f64; 1]> = flags.iter().map(|&f| [f64::from(u8::from(f))]).collect();
+    part.halo.exchange(comm, &mut v);
+    v.iter().map(|f| f[0] != 0.0).collect()
 }
 
 /// The ghosts' roles as their owners classified them (collective): a ghost's own

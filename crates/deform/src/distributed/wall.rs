@@ -20,6 +20,7 @@ use mpi::traits::*;
 
 use super::comm::{Comm, broadcast_vec, max, min, sum_n, sum_u64};
 use super::partition::Partition;
+use super::scatter::Local;
 use crate::bc::NodeRole;
 use crate::report::FarField;
 use crate::stiffness::{NodeVolumes, Springs, Stiffness, WALL_SCALE, mean_volume};
@@ -154,6 +155,18 @@ pub(crate) fn boundary_distance(comm: &Comm, part: &Partition, root: &[bool]) ->
         }
     }
     edge_distance(comm, part, &g.mesh.coords, &source)
+}
+
+/// The distance of every local node of `local` from the serial deformation's moving
+/// boundary along grid edges, on the baseline grid: from rank 0's ([`boundary_distance`]) on
+/// a part made there, from the owners' flags on a given part. Collective.
+pub(crate) fn moving_distance(comm: &Comm, local: &Local) -> Vec<f64> {
+    let part = &local.part;
+    if local.caller.is_some() {
+        edge_distance(comm, part, &part.grid.mesh.coords, &local.given_boundary)
+    } else {
+        boundary_distance(comm, part, &local.root_boundary)
+    }
 }
 
 /// The far-field report of the local coordinates `cur` (as the serial
