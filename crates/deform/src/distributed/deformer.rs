@@ -9,12 +9,11 @@ use std::time::Instant;
 
 use mesh::quality::Summary;
 use mesh::{Elements, Marker, Mesh};
-use mpi::datatype::PartitionMut;
 use mpi::traits::*;
 use sparse::{Constraints, V3};
 
 use super::coarse::{CoarseOp, CoarseSpace};
-use super::comm::{Comm, agree, max, min, offsets, sum_n, sum_u64};
+use super::comm::{Comm, agree, max, min, sum_n, sum_u64};
 use super::halo::Halo;
 use super::metis::Partitioner;
 use super::partition::{LocalGrid, Partition, locality_order};
@@ -83,6 +82,8 @@ pub struct Deformer<'c> {
     coarse_parts: usize,
     /// One layer of overlap in the blocks of the preconditioner.
     overlap: bool,
+    /// The interface smoother around the overlapping blocks.
+    sweep: bool,
     /// The nodes sliding on geometry supports (None without).
     slide: Option<Slide>,
     /// The weight φ of R per local node (the reach of R; empty: 1 everywhere).
@@ -297,6 +298,7 @@ impl<'c> Deformer<'c> {
             scale: length_scale(diag, opts.stiffness),
             coarse_parts: COARSE_PARTS,
             overlap: true,
+            sweep: true,
             slide: None,
             reach: Vec::new(),
             wall_distance: None,
@@ -322,6 +324,15 @@ impl<'c> Deformer<'c> {
     /// blocks only; iterations of both in docs/mpi.md.
     pub fn overlap(mut self, on: bool) -> Self {
         self.overlap = on;
+        self.base = std::cell::RefCell::new(None);
+        self
+    }
+
+    /// Sets whether the overlapping blocks are wrapped in the interface smoother (a damped
+    /// Jacobi sweep on the rows near the interface before and after them; default) or not.
+    /// Iterations of both in docs/mpi.md.
+    pub fn interface_sweep(mut self, on: bool) -> Self {
+        self.sweep = on;
         self.base = std::cell::RefCell::new(None);
         self
     }
@@ -786,6 +797,7 @@ impl<'c> Deformer<'c> {
             comm,
             halo: &self.unk_halo,
             unk_node: &self.unk_node,
+            sweep: self.sweep,
         });
         let op = DistOperator::new(sys, &part.adj, &sp, sys.node_of.len(), opts, overlap);
         let mut op = agree(comm, op)?;
@@ -837,46 +849,9 @@ impl<'c> Deformer<'c> {
     /// [`DistDeformed::coords`]), gathered on rank 0 in global-id order (`None` on the other
     /// ranks). Collective.
     pub fn gather(&self, coords: &[[f64; 3]]) -> Option<Vec<[f64; 3]>> {
-        let (comm, part) = (self.comm, &self.local.part);
-        let no = part.grid.n_owned;
-        let mut gids = self.local_ids();
-        gids.truncate(no);
-        let xs: Vec<f64> = coords[..no].iter().flatten().copied().collect();
-        let root = comm.process_at_rank(0);
-        let mut counts = vec![0i32; comm.size() as usize];
-        if comm.rank() == 0 {
-            root.gather_into_root(&(no as i32), &mut counts[..]);
-        } else {
-            root.gather_into(&(no as i32));
-        }
-        if comm.rank() != 0 {
-            root.gather_varcount_into(&gids[..]);
-            root.gather_varcount_into(&xs[..]);
-            return None;
-        }
-        let displs = |w: i32| -> (Vec<i32>, Vec<i32>) {
-            let c: Vec<i32> = counts.iter().map(|&c| c * w).collect();
-            let d = offsets(&c);
-            (c, d)
-        };
-        let total: usize = counts.iter().map(|&c| c as usize).sum();
-        let mut all_g = vec![0u64; total];
-        let mut all_x = vec![0.0f64; 3 * total];
-        let (c1, d1) = displs(1);
-        root.gather_varcount_into_root(
-            &gids[..],
-            &mut PartitionMut::new(&mut all_g[..], &c1[..], &d1[..]),
-        );
-        let (c3, d3) = displs(3);
-        root.gather_varcount_into_root(
-            &xs[..],
-            &mut PartitionMut::new(&mut all_x[..], &c3[..], &d3[..]),
-        );
-        let mut out = vec![[0.0; 3]; total];
-        for (k, &g) in all_g.iter().enumerate() {
-            out[g as usize] = [all_x[3 * k], all_x[3 * k + 1], all_x[3 * k + 2]];
-        }
-        Some(out)
+        let no = self.local.part.grid.n_owned;
+        let gids = self.local_ids();
+        super::scatter::gather(self.comm, &gids[..no], &coords[..no])
     }
 }
 

@@ -30,6 +30,7 @@ mod comm;
 mod cores;
 pub mod deformer;
 mod halo;
+mod interface;
 pub mod metis;
 pub mod partition;
 mod quality;

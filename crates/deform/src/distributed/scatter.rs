@@ -6,11 +6,12 @@
 //! ([`super::metis::cut`]), and sends each rank its part.
 
 use mesh::{ElementKind, Mesh};
+use mpi::datatype::PartitionMut;
 use mpi::traits::*;
 use rayon::prelude::*;
 use sparse::order;
 
-use super::comm::{Comm, agree};
+use super::comm::{Comm, agree, offsets};
 use super::cores::{broadcast_idle, on_pool, root_pool};
 use super::metis::{Partitioner, cut_in};
 use super::partition::{LocalGrid, Partition};
@@ -546,4 +547,47 @@ fn decode(ints: &[u64], floats: &[f64]) -> Result<Decoded> {
         supports: Vec::new(),
     };
     Ok((grid, cls, disp, disp_src))
+}
+
+/// The owned nodes' coordinates `coords` of every rank, whose global ids are `gids`,
+/// gathered on rank 0 in global-id order (`None` on the other ranks): the inverse of the
+/// scatter, for [`super::Deformer::gather`]. Collective.
+pub(crate) fn gather(comm: &Comm, gids: &[u64], coords: &[[f64; 3]]) -> Option<Vec<[f64; 3]>> {
+    let no = gids.len();
+    let xs: Vec<f64> = coords.iter().flatten().copied().collect();
+    let root = comm.process_at_rank(0);
+    let mut counts = vec![0i32; comm.size() as usize];
+    if comm.rank() == 0 {
+        root.gather_into_root(&(no as i32), &mut counts[..]);
+    } else {
+        root.gather_into(&(no as i32));
+    }
+    if comm.rank() != 0 {
+        root.gather_varcount_into(gids);
+        root.gather_varcount_into(&xs[..]);
+        return None;
+    }
+    let displs = |w: i32| -> (Vec<i32>, Vec<i32>) {
+        let c: Vec<i32> = counts.iter().map(|&c| c * w).collect();
+        let d = offsets(&c);
+        (c, d)
+    };
+    let total: usize = counts.iter().map(|&c| c as usize).sum();
+    let mut all_g = vec![0u64; total];
+    let mut all_x = vec![0.0f64; 3 * total];
+    let (c1, d1) = displs(1);
+    root.gather_varcount_into_root(
+        gids,
+        &mut PartitionMut::new(&mut all_g[..], &c1[..], &d1[..]),
+    );
+    let (c3, d3) = displs(3);
+    root.gather_varcount_into_root(
+        &xs[..],
+        &mut PartitionMut::new(&mut all_x[..], &c3[..], &d3[..]),
+    );
+    let mut out = vec![[0.0; 3]; total];
+    for (k, &g) in all_g.iter().enumerate() {
+        out[g as usize] = [all_x[3 * k], all_x[3 * k + 1], all_x[3 * k + 2]];
+    }
+    Some(out)
 }

@@ -15,6 +15,7 @@ use sparse::{Constraints, Csr, Jacobi, Preconditioner, SolveReport, SymMatrix};
 use super::coarse::CoarseOp;
 use super::comm::{Comm, agree, max, sum, sum_n};
 use super::halo::Halo;
+use super::interface::{Interface, Scratch};
 use crate::assembly::{System, assemble, couplings};
 use crate::error::Result;
 use crate::options::{DeformOptions, SolverKind};
@@ -41,6 +42,8 @@ pub(crate) struct Overlap<'a> {
     pub halo: &'a Halo,
     /// Local node of every local unknown (owned, then ghosts).
     pub unk_node: &'a [u32],
+    /// The interface smoother around the blocks ([`super::interface`]).
+    pub sweep: bool,
 }
 
 /// Eq. 21's matrix on a rank: rows of the owned unknowns, columns of the local unknowns
@@ -55,6 +58,9 @@ pub(crate) struct DistOperator {
     ghost_rows: Vec<u32>,
     /// The ranks' blocks overlap: every application exchanges through the halo.
     overlap_halo: bool,
+    /// The interface smoother before and after the blocks (with the overlap, when asked
+    /// for; on every rank alike, with a band or not).
+    interface: Option<Interface>,
     /// The springs from each owned unknown to its prescribed neighbours.
     pub couplings: Csr,
     /// The coarse-grid correction across the ranks (none on one rank).
@@ -80,6 +86,8 @@ struct Work {
     /// The residual and the correction on the extended block (overlap; else empty).
     r_ext: Vec<V3>,
     z_ext: Vec<V3>,
+    /// The interface smoother's vectors (when there is one).
+    sweep: Option<Scratch>,
 }
 
 impl DistOperator {
@@ -123,11 +131,12 @@ impl DistOperator {
                     .map(|(&c, &v)| (c, f64::from(v))),
             );
         });
-        let ghost_rows = (0..n_own)
+        let ghost_rows: Vec<u32> = (0..n_own)
             .filter(|&k| ghost.offsets[k + 1] > ghost.offsets[k])
             .map(|k| k as u32)
             .collect();
         let overlap_halo = overlap.is_some() && opts.solver == SolverKind::PcgMultigrid;
+        let sweep = overlap_halo && overlap.as_ref().is_some_and(|o| o.sweep);
         // The owned–owned block: `a` without its ghost columns.
         let own = (!ghost.cols.is_empty()).then(|| {
             let mut own = SymMatrix {
@@ -156,6 +165,7 @@ impl DistOperator {
             }
             _ => (own.unwrap_or(a), None),
         };
+        let interface = sweep.then(|| Interface::new(&own, &ghost, &ghost_rows));
         let block = match opts.solver {
             _ if ext.is_some() => {
                 let (ext, wt) = ext.expect("the extended block");
@@ -176,6 +186,7 @@ impl DistOperator {
             ghost,
             ghost_rows,
             overlap_halo,
+            interface,
             couplings,
             coarse: None,
             held: false,
@@ -331,8 +342,25 @@ impl DistOperator {
         z: &mut [V3],
         w: &mut Work,
     ) {
-        self.block(comm, halo, r, z, w);
-        cons.project(z);
+        match (&self.interface, w.sweep.take()) {
+            (Some(f), Some(mut s)) => {
+                f.apply(
+                    self.own(),
+                    &self.ghost,
+                    &mut s,
+                    r,
+                    z,
+                    |v| cons.project(v),
+                    |v| halo.exchange(comm, v),
+                    |r, z| self.block(comm, halo, r, z, w),
+                );
+                w.sweep = Some(s);
+            }
+            _ => {
+                self.block(comm, halo, r, z, w);
+                cons.project(z);
+            }
+        }
         if let Some(coarse) = &self.coarse {
             let c = coarse.coarse_of(comm, r, Some(z));
             coarse.add_prolonged(&c, z);
@@ -396,6 +424,7 @@ impl DistOperator {
             work: vec![[0.0; 3]; n.max(n_ext)],
             r_ext: vec![[0.0; 3]; n_ext],
             z_ext: vec![[0.0; 3]; n_ext],
+            sweep: self.interface.as_ref().map(|_| Scratch::new(n, n_all)),
         };
         let mut rr = self.residual(comm, halo, &bp, x, &mut full, cons, &mut r);
         if let Some(c) = &self.coarse {
@@ -405,6 +434,10 @@ impl DistOperator {
         let name = match (&self.block, &self.coarse) {
             (Block::Amg(_), None) => "block-amg",
             (Block::Amg(_), Some(_)) => "block-amg-coarse",
+            (Block::Overlap(..), None) if self.interface.is_some() => "schwarz-amg-interface",
+            (Block::Overlap(..), Some(_)) if self.interface.is_some() => {
+                "schwarz-amg-interface-coarse"
+            }
             (Block::Overlap(..), None) => "schwarz-amg",
             (Block::Overlap(..), Some(_)) => "schwarz-amg-coarse",
             (_, None) => "block-jacobi",
