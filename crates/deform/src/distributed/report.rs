@@ -34,8 +34,9 @@ pub struct DistReport {
     pub rotation_iterations: usize,
     /// Largest final relative residual of the Eq. 21 solves.
     pub residual: f64,
-    /// The Eq. 21 solver of the last increment, e.g. `pcg-schwarz-amg-coarse-held`: the
-    /// block (`block-amg`, `schwarz-amg` with the overlap, `block-jacobi`), `-coarse` with
+    /// The Eq. 21 solver of the last increment, e.g. `pcg-schwarz-amg-interface-coarse-held`:
+    /// the block (`block-amg`, `schwarz-amg` with the overlap, `block-jacobi`), `-interface`
+    /// with the interface sweep around the overlapping blocks, `-coarse` with
     /// the coarse-grid correction, `-held` when the block multigrid is the constrained one
     /// (docs/mpi.md, "Preconditioner"); empty when nothing moved.
     pub solver: String,
