@@ -156,12 +156,12 @@ fn vec3(v: [f64; 3], what: &str) -> PyResult<[f64; 3]> {
     mesh, *, rigid=Vec::new(), rotate_deg=0.0, axis_point=[0.0, 0.0, 0.0],
     axis_dir=[0.0, 0.0, 1.0], translate=[0.0, 0.0, 0.0], displacements=None,
     slide=Vec::new(), geometry=None, fixed=Vec::new(), solver="pcg",
-    stiffness="inverse-length2", no_rotation=false, tolerance=1e-8, allow_inverted=false,
-    progress=None
+    stiffness="inverse-length2", no_rotation=false, rotation_reach=None, tolerance=1e-8,
+    allow_inverted=false, progress=None
 ), text_signature = "(mesh, *, rigid=(), rotate_deg=0.0, axis_point=(0.0, 0.0, 0.0), \
     axis_dir=(0.0, 0.0, 1.0), translate=(0.0, 0.0, 0.0), displacements=None, slide=(), \
     geometry=None, fixed=(), solver='pcg', stiffness='inverse-length2', no_rotation=False, \
-    tolerance=1e-08, allow_inverted=False, progress=None)")]
+    rotation_reach=None, tolerance=1e-08, allow_inverted=False, progress=None)")]
 pub fn deform_mesh(
     py: Python<'_>,
     mesh: PyRef<'_, PyMesh>,
@@ -177,6 +177,7 @@ pub fn deform_mesh(
     solver: &str,
     stiffness: &str,
     no_rotation: bool,
+    rotation_reach: Option<f64>,
     tolerance: f64,
     allow_inverted: bool,
     progress: Option<Bound<'_, PyAny>>,
@@ -196,7 +197,10 @@ pub fn deform_mesh(
         slide,
         fixed,
         [solver, stiffness],
-        no_rotation,
+        Rotation {
+            off: no_rotation,
+            reach: rotation_reach,
+        },
         tolerance,
         allow_inverted,
     )?;
@@ -246,6 +250,14 @@ pub(crate) struct Motion {
     pub translate: [f64; 3],
 }
 
+/// The rotation keywords of `deform`: `no_rotation` and `rotation_reach` (None: R reaches
+/// everywhere).
+#[derive(Clone, Copy)]
+pub(crate) struct Rotation {
+    pub off: bool,
+    pub reach: Option<f64>,
+}
+
 /// The deformation request of the keywords of `deform` on a grid of `n_nodes` nodes, checked
 /// as the command line checks its flags (`[solver, stiffness]` by their names).
 pub(crate) fn request(
@@ -255,7 +267,7 @@ pub(crate) fn request(
     slide: Vec<String>,
     fixed: Vec<String>,
     [solver, stiffness]: [&str; 2],
-    no_rotation: bool,
+    rotation: Rotation,
     tolerance: f64,
     allow_inverted: bool,
 ) -> PyResult<::deform::Request> {
@@ -275,6 +287,16 @@ pub(crate) fn request(
         return Err(PyValueError::new_err(format!(
             "rotate_deg: {rotate_deg} is not a finite number"
         )));
+    }
+    if let Some(l) = rotation.reach.filter(|l| l.is_nan() || *l < 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "rotation_reach: {l} is not a length ≥ 0 (inf: R reaches everywhere)"
+        )));
+    }
+    if rotation.off && rotation.reach.is_some() {
+        return Err(PyValueError::new_err(
+            "rotation_reach: R is off (no_rotation=True); give one or the other",
+        ));
     }
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(PyValueError::new_err(format!(
@@ -298,8 +320,8 @@ pub(crate) fn request(
         fixed,
         solver: named::<SolverKind>("solver", solver)?,
         stiffness: named::<Stiffness>("stiffness", stiffness)?,
-        adapt_rotation: !no_rotation,
-        rotation_reach: None,
+        adapt_rotation: !rotation.off,
+        rotation_reach: rotation.reach,
         rel_tol: tolerance,
         allow_inverted,
     })

@@ -29,7 +29,7 @@ use pyo3::prelude::*;
 use self_cell::self_cell;
 
 use crate::arrays;
-use crate::deformation::{Motion, request};
+use crate::deformation::{Motion, Rotation, request};
 use crate::errors::{self, Kind};
 use crate::grid::PyMesh;
 
@@ -139,7 +139,7 @@ struct Keywords<'py> {
     fixed: Vec<String>,
     solver: String,
     stiffness: String,
-    no_rotation: bool,
+    rotation: Rotation,
     tolerance: f64,
     allow_inverted: bool,
     partition: String,
@@ -178,7 +178,7 @@ fn read(
             k.slide.clone(),
             k.fixed.clone(),
             [&k.solver, &k.stiffness],
-            k.no_rotation,
+            k.rotation,
             k.tolerance,
             k.allow_inverted,
         )
@@ -363,8 +363,9 @@ impl PyDistributedDeformer {
         world_ranks, rank, mesh, global_ids=None, n_owned=None, *, rigid=Vec::new(),
         rotate_deg=0.0, axis_point=[0.0, 0.0, 0.0], axis_dir=[0.0, 0.0, 1.0],
         translate=[0.0, 0.0, 0.0], displacements=None, slide=Vec::new(), fixed=Vec::new(),
-        solver="pcg", stiffness="inverse-length2", no_rotation=false, tolerance=1e-8,
-        allow_inverted=false, partition="metis", coarse_parts=distributed::COARSE_PARTS
+        solver="pcg", stiffness="inverse-length2", no_rotation=false, rotation_reach=None,
+        tolerance=1e-8, allow_inverted=false, partition="metis",
+        coarse_parts=distributed::COARSE_PARTS
     ))]
     fn new(
         py: Python<'_>,
@@ -384,6 +385,7 @@ impl PyDistributedDeformer {
         solver: &str,
         stiffness: &str,
         no_rotation: bool,
+        rotation_reach: Option<f64>,
         tolerance: f64,
         allow_inverted: bool,
         partition: &str,
@@ -403,7 +405,10 @@ impl PyDistributedDeformer {
             fixed,
             solver: solver.into(),
             stiffness: stiffness.into(),
-            no_rotation,
+            rotation: Rotation {
+                off: no_rotation,
+                reach: rotation_reach,
+            },
             tolerance,
             allow_inverted,
             partition: partition.into(),

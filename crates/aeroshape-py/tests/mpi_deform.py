@@ -7,7 +7,8 @@ distributed deformation through mpi4py against the serial ``aeroshape.deform`` o
 2. Each rank's own part, cut here by slabs of x (owned nodes, then the ghosts of the cells
    around them, the boundary elements of its nodes), rigid and fixed markers only: the wing
    and fuselage lifted by 0.05 (without the sliding plane, the pitch above inverts a cell
-   at the wing root even serially).
+   at the wing root even serially); then pitched by 1° with a reach of R, against the serial
+   result with the same reach.
 3. Bad arguments on one rank only: every rank raises, nobody hangs.
 4. One set-up, two designs (``distributed.Deformer``): the wing and fuselage nodes displaced
    (a lift growing along x), first by one amount, then by another through ``deform`` on the
@@ -117,6 +118,19 @@ def main() -> int:
         check("given", dev <= REL and d.report["partitioner"] == "given" and far,
               f"deviation {dev:.2e}, {d.report['ghost_nodes']} ghost nodes, "
               f"far field {fd} (serial {fs})")
+    # The reach of R on the given part: each owner finds the moving boundary among its nodes.
+    tilt = dict(rigid=["wing", "fuselage"], rotate_deg=1.0, axis_point=(5, 0, 0),
+                axis_dir=(0, 1, 0), fixed=["symmetry"], tolerance=1e-11)
+    reach = 2.0
+    sn = aeroshape.deform(mesh, rotation_reach=reach, **tilt).coordinates if rank == 0 else None
+    sf = aeroshape.deform(mesh, **tilt).coordinates if rank == 0 else None
+    d = distributed.deform(comm, m, global_ids=gids, n_owned=n_owned, rotation_reach=reach, **tilt)
+    if rank == 0:
+        dev = deviation(d.coordinates, sn, x0)
+        effect = deviation(sf, sn, x0)
+        check("given-reach", dev <= REL and effect > 1e-4,
+              f"deviation {dev:.2e} from serial with the reach {reach}, "
+              f"which moves the serial grid by {effect:.2e}")
 
     # 3. Bad arguments on rank 0 alone: every rank raises.
     raised = None

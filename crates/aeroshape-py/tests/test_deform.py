@@ -1,5 +1,6 @@
-"""deform: the same grid as ``aeroshape deform`` bit for bit, a rigid motion of the whole
-boundary moving every node rigidly, displacements as arrays, bad options raising."""
+"""deform: the same grid as ``aeroshape deform`` bit for bit (with a reach of R too), a rigid
+motion of the whole boundary moving every node rigidly, displacements as arrays, bad options
+raising."""
 
 from __future__ import annotations
 
@@ -31,6 +32,25 @@ def test_deform_is_aeroshape_deform_bit_for_bit(cli, data, brick, tmp_path):
     assert np.array_equal(d.coordinates, d.mesh.coordinates)
     assert d.report["iterations"] > 0 and d.report["residual"] < 1e-8
     assert d.cell_quality.min() > 0
+
+
+def test_rotation_reach_is_the_programs(cli, data, brick, tmp_path):
+    """``rotation_reach=L`` is ``--rotation-reach L`` bit for bit; it changes the grid, and
+    ``inf`` is the default (R everywhere) bit for bit."""
+    src = data / "su2" / "mesh_brick_tets_ffd.su2"
+    kw = dict(rigid=["z_p"], rotate_deg=2, axis_point=(0.5, 0.5, 0.5), axis_dir=(1, 0, 0),
+              fixed=["z_m"])
+    run_cli(cli, "deform", src, "-o", tmp_path / "cli.su2", "--rigid", "z_p", "--rotate-deg", "2",
+            "--axis-point", "0.5,0.5,0.5", "--axis-dir", "1,0,0", "--fixed", "z_m",
+            "--rotation-reach", "0.2")
+    near = aeroshape.deform(brick, rotation_reach=0.2, **kw)
+    aeroshape.write_mesh(tmp_path / "py.su2", near.mesh)
+    assert (tmp_path / "cli.su2").read_bytes() == (tmp_path / "py.su2").read_bytes()
+    full = aeroshape.deform(brick, **kw)
+    assert np.array_equal(aeroshape.deform(brick, rotation_reach=np.inf, **kw).coordinates,
+                          full.coordinates)
+    moved = np.linalg.norm(full.coordinates - brick.coordinates, axis=1).max()
+    assert np.linalg.norm(near.coordinates - full.coordinates, axis=1).max() > 1e-3 * moved
 
 
 def test_rigid_motion_of_the_whole_boundary_moves_every_node_rigidly(brick):
@@ -65,6 +85,11 @@ def test_bad_options_raise(brick):
         aeroshape.deform(brick, displacements={99999: (0, 0, 1)})
     with pytest.raises(ValueError, match="node 3 given twice"):
         aeroshape.deform(brick, displacements=([3, 3], [[0, 0, 1], [0, 0, 1]]))
+    for bad in (-1.0, float("nan")):
+        with pytest.raises(ValueError, match="rotation_reach"):
+            aeroshape.deform(brick, rigid=["z_p"], rotate_deg=2, rotation_reach=bad)
+    with pytest.raises(ValueError, match="no_rotation"):
+        aeroshape.deform(brick, rigid=["z_p"], rotate_deg=2, no_rotation=True, rotation_reach=1.0)
     with pytest.raises(aeroshape.DeformError, match="nope"):
         aeroshape.deform(brick, rigid=["nope"], translate=(0, 0, 0.1))
 

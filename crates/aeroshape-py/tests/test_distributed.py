@@ -58,6 +58,6 @@ def test_mpi4py_communicator_gives_the_serial_grid(mpirun, ranks):
     assert r.returncode == 0, report
     names = [line.split(":")[0].split()[1] for line in results]
     assert names == ["file-metis", "file-metis-local", "mesh-rcb", "mesh-rcb-local", "given",
-                     "bad-argument", "mixed-ways", "kept-made", "kept-refused",
+                     "given-reach", "bad-argument", "mixed-ways", "kept-made", "kept-refused",
                      "kept-warm", "kept-given"], report
     assert "partitioner metis" in results[0], report

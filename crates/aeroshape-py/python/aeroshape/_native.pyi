@@ -340,6 +340,7 @@ def deform(
     solver: Literal["pcg", "jacobi", "pcg-jacobi"] = "pcg",
     stiffness: Literal["inverse-length", "inverse-length2", "volume", "wall-distance"] = "inverse-length2",
     no_rotation: bool = False,
+    rotation_reach: float | None = None,
     tolerance: float = 1e-8,
     allow_inverted: bool = False,
     progress: _Progress | None = None,

@@ -50,7 +50,8 @@ def deform(
 
     The keywords are those of :func:`aeroshape.deform` (``rigid``, ``rotate_deg``,
     ``axis_point``, ``axis_dir``, ``translate``, ``displacements``, ``slide``, ``fixed``,
-    ``solver``, ``stiffness``, ``no_rotation``, ``tolerance``, ``allow_inverted``; not
+    ``solver``, ``stiffness``, ``no_rotation``, ``rotation_reach``, ``tolerance``,
+    ``allow_inverted``; not
     ``geometry`` or ``progress``), with ``partition`` and ``coarse_parts`` (aggregates per rank
     of the coarse-grid correction) of ``aeroshape deform`` under mpirun.
 
