@@ -170,3 +170,149 @@ impl Interface {
         s.z1[n..].fill([0.0; 3]);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sparse::{Constraint, Constraints};
+
+    /// The spring Laplacian of an `m` × `m` grid of unknowns (4-neighbours, springs of
+    /// varied stiffness, every diagonal also held by a spring to a prescribed node), and
+    /// ghost columns on the rows of the last grid column (a neighbouring rank's nodes).
+    fn problem(m: usize) -> (SymMatrix<f32>, Csr) {
+        let n = m * m;
+        let k = |i: usize, j: usize| 1.0 + ((i * 7 + j * 13) % 5) as f64;
+        let mut a = SymMatrix {
+            diag: vec![0.0; n],
+            offsets: vec![0],
+            cols: Vec::new(),
+            vals: Vec::new(),
+        };
+        for i in 0..n {
+            let (r, c) = (i / m, i % m);
+            let mut nb = Vec::new();
+            if r > 0 {
+                nb.push(i - m);
+            }
+            if c > 0 {
+                nb.push(i - 1);
+            }
+            if c + 1 < m {
+                nb.push(i + 1);
+            }
+            if r + 1 < m {
+                nb.push(i + m);
+            }
+            a.diag[i] = 0.5 + nb.iter().map(|&j| k(i.min(j), i.max(j))).sum::<f64>();
+            for j in nb {
+                a.cols.push(j as u32);
+                a.vals.push(-k(i.min(j), i.max(j)) as f32);
+            }
+            a.offsets.push(a.cols.len());
+        }
+        let ghost = Csr::from_rows(n, n + m, |i, row| {
+            if i % m == m - 1 {
+                row.push(((n + i / m) as u32, -2.0));
+            }
+        });
+        (a, ghost)
+    }
+
+    /// M r of the interface sweep around the block B r = D⁻¹ r, the ghosts' values zero
+    /// (a neighbour whose vector is zero), projected by `cons`.
+    fn apply(f: &Interface, a: &SymMatrix<f32>, g: &Csr, cons: &Constraints, r: &[V3]) -> Vec<V3> {
+        let n = r.len();
+        let mut s = Scratch::new(n, g.ncols);
+        let mut z = vec![[0.0; 3]; n];
+        let block = |r: &[V3], z: &mut [V3]| {
+            for k in 0..n {
+                z[k] = r[k].map(|v| v / a.diag[k]);
+            }
+        };
+        let exchange = |v: &mut [V3]| v[n..].fill([0.0; 3]);
+        f.apply(
+            a,
+            g,
+            &mut s,
+            r,
+            &mut z,
+            |v| cons.project(v),
+            exchange,
+            block,
+        );
+        // The scratch is zero off the band again.
+        assert!(s.z1.iter().chain(&s.s2).all(|v| *v == [0.0; 3]));
+        z
+    }
+
+    fn dot(u: &[V3], v: &[V3]) -> f64 {
+        u.iter()
+            .zip(v)
+            .map(|(a, b)| a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+            .sum()
+    }
+
+    #[test]
+    fn the_band_is_two_layers_from_the_ghosts_and_the_sweep_symmetric_positive() {
+        let m = 7;
+        let (a, g) = problem(m);
+        let ghost_rows: Vec<u32> = (0..m * m)
+            .filter(|i| i % m == m - 1)
+            .map(|i| i as u32)
+            .collect();
+        let f = Interface::new(&a, &g, &ghost_rows);
+        let want: Vec<u32> = (0..m * m)
+            .filter(|i| i % m >= m - 2)
+            .map(|i| i as u32)
+            .collect();
+        assert_eq!(f.band, want);
+        let near: Vec<u32> = (0..m * m)
+            .filter(|i| i % m >= m - 3)
+            .map(|i| i as u32)
+            .collect();
+        assert_eq!(f.near, near);
+        // ℓ1 weights: 1.8 over the row's absolute sum, ghost columns included.
+        let k = m - 1;
+        let (_, v) = a.row(k);
+        let sum = a.diag[k] + v.iter().map(|&v| f64::from(v).abs()).sum::<f64>() + 2.0;
+        assert!(
+            (f.weight[f.band.iter().position(|&b| b as usize == k).unwrap()] - 1.8 / sum).abs()
+                < 1e-15
+        );
+        // A plane held at one node, a line at another.
+        let cons = Constraints {
+            items: vec![
+                (k as u32, Constraint::Plane([0.0, 1.0, 0.0])),
+                (5, Constraint::Line([0.6, 0.8, 0.0])),
+            ],
+        };
+        let vec = |seed: usize| -> Vec<V3> {
+            let mut v: Vec<V3> = (0..m * m)
+                .map(|i| [0, 1, 2].map(|q| (((i * 31 + q * 17 + seed * 101) % 23) as f64) - 11.0))
+                .collect();
+            cons.project(&mut v);
+            v
+        };
+        for (s, t) in [(1, 2), (3, 4), (5, 9)] {
+            let (u, v) = (vec(s), vec(t));
+            let (mu, mv) = (apply(&f, &a, &g, &cons, &u), apply(&f, &a, &g, &cons, &v));
+            let (uv, vu) = (dot(&u, &mv), dot(&v, &mu));
+            assert!(
+                (uv - vu).abs() <= 1e-12 * uv.abs().max(1.0),
+                "{uv} against {vu}"
+            );
+            assert!(dot(&v, &mv) > 0.0 && dot(&u, &mu) > 0.0);
+        }
+        // The sweep does change the block's answer on the band, and only there and next to it.
+        let r = vec(7);
+        let mut plain = vec![[0.0; 3]; m * m];
+        for i in 0..m * m {
+            plain[i] = r[i].map(|x| x / a.diag[i]);
+        }
+        cons.project(&mut plain);
+        let swept = apply(&f, &a, &g, &cons, &r);
+        let changed: Vec<usize> = (0..m * m).filter(|&i| swept[i] != plain[i]).collect();
+        assert!(changed.iter().any(|&i| i % m == m - 1));
+        assert!(changed.iter().all(|&i| i % m >= m - 3), "{changed:?}");
+    }
+}
