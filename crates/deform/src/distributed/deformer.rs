@@ -176,7 +176,8 @@ impl<'c> Deformer<'c> {
     fn with_reach(mut self) -> Self {
         let t = Instant::now();
         let (comm, local) = (self.comm, &self.local);
-        let d = super::wall::moving_distance(comm, local);
+        let part = &local.part;
+        let d = super::wall::edge_distance(comm, part, &part.grid.mesh.coords, &local.boundary);
         if let Some(l) = self.opts.rotation_reach.filter(|l| l.is_finite()) {
             self.reach = d.iter().map(|&d| reach_weight(d, l)).collect();
         }

@@ -11,7 +11,7 @@ use mpi::traits::*;
 use rayon::prelude::*;
 use sparse::order;
 
-use super::comm::{Comm, agree, offsets};
+use super::comm::{Comm, agree, broadcast_vec, offsets};
 use super::cores::{broadcast_idle, on_pool, root_pool};
 use super::metis::{Partitioner, cut_in};
 use super::partition::{LocalGrid, Partition};
@@ -47,22 +47,20 @@ pub(crate) struct Local {
     /// finds them (whole-grid numbering); empty elsewhere. Their roles are sent as free:
     /// `super::slide` hands each owner its own.
     pub root_supports: Vec<SupNode>,
-    /// On rank 0 of a partition made there, the moving boundary of the serial deformation
-    /// (`crate::deformer::moving_boundary`, whole-grid numbering): what the reach of R and
-    /// the far-field report measure from; empty otherwise.
-    pub root_boundary: Vec<bool>,
-    /// For a part given by the caller, the moving boundary of the serial deformation among
-    /// the local nodes: each owner flags its owned nodes from its own boundary elements (it
-    /// has every boundary element of its nodes), the ghosts take their owners' flags; empty
-    /// for a part made on rank 0.
-    pub given_boundary: Vec<bool>,
+    /// The moving boundary of the serial deformation (`crate::deformer::moving_boundary`)
+    /// among the local nodes, what the reach of R and the far-field report measure from: on
+    /// a part made on rank 0, found there on the whole grid and broadcast; on a given part,
+    /// each owner flags its owned nodes from its own boundary elements (it has every
+    /// boundary element of its nodes) and the ghosts take their owners' flags.
+    pub boundary: Vec<bool>,
     /// For a part given by the caller: the renumbering of its nodes into this share's
     /// (`perm[caller's local node] = local node`; the owned nodes in the serial solver's
     /// order for locality, the ghosts kept in place). None for a part made on rank 0,
     /// whose numbering is the library's own.
     pub caller: Option<Vec<u32>>,
     /// Seconds this rank spent on its own part once it had it: decoding it, its checks,
-    /// adjacency, ordering and halo ([`Partition`]), and its nodes' roles.
+    /// adjacency, ordering and halo ([`Partition`]), its nodes' roles and the moving
+    /// boundary's flags.
     pub own_seconds: f64,
 }
 
@@ -114,7 +112,7 @@ impl Local {
         let before = cls.roles.clone();
         owners_roles(comm, &part, &mut cls, &mut disp);
         displaced_skin(&part.grid.mesh, bc, &before, &mut cls);
-        let given_boundary = owners_flags(
+        let boundary = owners_flags(
             comm,
             &part,
             crate::deformer::moving_boundary(&part.grid.mesh, bc, &cls),
@@ -128,8 +126,7 @@ impl Local {
             made_by: "given",
             partition_threads: 0,
             root_supports: Vec::new(),
-            root_boundary: Vec::new(),
-            given_boundary,
+            boundary,
             caller: Some(perm),
             own_seconds: t.elapsed().as_secs_f64(),
         })
@@ -228,6 +225,7 @@ impl Local {
                 *v = perm[*v as usize];
             }
         }
+        let boundary = root_flags(comm, &part, &root_boundary);
         Ok(Self {
             part,
             cls,
@@ -237,8 +235,7 @@ impl Local {
             partition_threads,
             made_by: MADE_BY.get(how as usize - 1).copied().unwrap_or("?"),
             root_supports,
-            root_boundary,
-            given_boundary: Vec::new(),
+            boundary,
             caller: None,
             own_seconds: t.elapsed().as_secs_f64(),
         })
@@ -352,6 +349,33 @@ fn displaced_skin(mesh: &Mesh, bc: &BoundaryConditions, before: &[NodeRole], cls
     };
     let new = |e: &[u32]| !all_displaced(before, e);
     push_displaced_skin(mesh, rigid, &cls.roles, new, &mut cls.skin);
+}
+
+/// Rank 0's whole-grid `root` flags (read on rank 0 only) on the local nodes of `part`:
+/// broadcast as the global ids of the flagged nodes (collective).
+fn root_flags(comm: &Comm, part: &Partition, root: &[bool]) -> Vec<bool> {
+    let ids: Vec<u64> = if comm.rank() == 0 {
+        (0..root.len() as u64)
+            .filter(|&g| root[g as usize])
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let ids = broadcast_vec(comm, 0, ids);
+    let g = &part.grid;
+    let local: std::collections::HashMap<u64, usize> = g
+        .global_ids
+        .iter()
+        .enumerate()
+        .map(|(i, &gid)| (gid, i))
+        .collect();
+    let mut flags = vec![false; g.mesh.n_nodes()];
+    for gid in ids {
+        if let Some(&i) = local.get(&gid) {
+            flags[i] = true;
+        }
+    }
+    flags
 }
 
 /// The local nodes' `flags` with the ghosts' replaced by their owners' (collective).

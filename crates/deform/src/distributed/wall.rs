@@ -13,14 +13,13 @@
 //!   diagonal of the moving nodes' bounding box over the ranks.
 //!
 //! And the fields measured from the moving boundary on the baseline grid: its distance
-//! along edges ([`boundary_distance`], for the reach of R and the far field) and the
-//! far-field report ([`far_field`]).
+//! along edges ([`edge_distance`] from `scatter::Local::boundary`, for the reach of R and
+//! the far field) and the far-field report ([`far_field`]).
 
 use mpi::traits::*;
 
-use super::comm::{Comm, broadcast_vec, max, min, sum_n, sum_u64};
+use super::comm::{Comm, max, min, sum_n, sum_u64};
 use super::partition::Partition;
-use super::scatter::Local;
 use crate::bc::NodeRole;
 use crate::report::FarField;
 use crate::stiffness::{NodeVolumes, Springs, Stiffness, WALL_SCALE, mean_volume};
@@ -127,53 +126,11 @@ pub(crate) fn edge_distance(
     flat
 }
 
-/// The distance of every local node from the moving boundary along grid edges, on the
-/// baseline grid, as the serial set-up's (`Deformer::wall_distance`): rank 0's moving
-/// boundary `root` (whole-grid numbering, read on rank 0 only) is broadcast as global ids,
-/// each rank flags its local nodes and the distance is [`edge_distance`] over the ranks.
-/// Collective.
-pub(crate) fn boundary_distance(comm: &Comm, part: &Partition, root: &[bool]) -> Vec<f64> {
-    let ids: Vec<u64> = if comm.rank() == 0 {
-        (0..root.len() as u64)
-            .filter(|&g| root[g as usize])
-            .collect()
-    } else {
-        Vec::new()
-    };
-    let ids = broadcast_vec(comm, 0, ids);
-    let g = &part.grid;
-    let local: std::collections::HashMap<u64, usize> = g
-        .global_ids
-        .iter()
-        .enumerate()
-        .map(|(i, &gid)| (gid, i))
-        .collect();
-    let mut source = vec![false; g.mesh.n_nodes()];
-    for gid in ids {
-        if let Some(&i) = local.get(&gid) {
-            source[i] = true;
-        }
-    }
-    edge_distance(comm, part, &g.mesh.coords, &source)
-}
-
-/// The distance of every local node of `local` from the serial deformation's moving
-/// boundary along grid edges, on the baseline grid: from rank 0's ([`boundary_distance`]) on
-/// a part made there, from the owners' flags on a given part. Collective.
-pub(crate) fn moving_distance(comm: &Comm, local: &Local) -> Vec<f64> {
-    let part = &local.part;
-    if local.caller.is_some() {
-        edge_distance(comm, part, &part.grid.mesh.coords, &local.given_boundary)
-    } else {
-        boundary_distance(comm, part, &local.root_boundary)
-    }
-}
-
 /// The far-field report of the local coordinates `cur` (as the serial
 /// `Deformer::far_field`: the largest displacement among the nodes at least the moving
 /// boundary's bounding-box diagonal away from it along grid edges), over the ranks, from
-/// each local node's distance `wall_distance` from the moving boundary
-/// ([`boundary_distance`]); the node by its global id (the whole grid's number).
+/// each local node's distance `wall_distance` from the moving boundary ([`edge_distance`]);
+/// the node by its global id (the whole grid's number).
 /// Collective.
 pub(crate) fn far_field(
     comm: &Comm,
