@@ -177,42 +177,49 @@ impl CoarseOp {
         }
         let rho = max(comm, rho);
         let omega = if rho > 0.0 { P_DAMPING / rho } else { 0.0 };
-        // P's owned rows, packed for the halo as (aggregate, value) pairs.
+        // P's owned rows.
+        let (mut p_off, mut p_col, mut p_val) = (vec![0], Vec::new(), Vec::new());
+        let mut acc = RowAcc::new(space.n);
+        for k in 0..n_own {
+            if agg[k] != NONE {
+                acc.clear();
+                acc.add(agg[k], 1.0 - omega);
+                let s = omega / diag[k];
+                a.row_entries(k, |c, v| {
+                    let g = agg[c];
+                    if g != NONE {
+                        acc.add(g, -s * v);
+                    }
+                });
+                let buf = acc.take();
+                if buf.len() > P_WIDTH {
+                    // The largest entries (ties by aggregate), then back in aggregate order.
+                    buf.sort_by(|x, y| y.1.abs().total_cmp(&x.1.abs()).then(x.0.cmp(&y.0)));
+                    buf.truncate(P_WIDTH);
+                    buf.sort_by_key(|e| e.0);
+                }
+                p_col.extend(buf.iter().map(|e| e.0));
+                p_val.extend(buf.iter().map(|e| e.1));
+            }
+            p_off.push(p_col.len());
+        }
+        // The ghosts' rows from their owners, packed as (aggregate, value) pairs for the
+        // rows sent only.
         let mut empty = [0.0f64; 2 * P_WIDTH];
         for e in 0..P_WIDTH {
             empty[2 * e] = f64::from(NONE);
         }
-        let mut rows = vec![empty; agg.len()];
-        let mut acc = RowAcc::new(space.n);
-        for k in 0..n_own {
-            let row = &mut rows[k];
-            if agg[k] == NONE {
-                continue;
+        let mut ghost_rows = vec![empty; agg.len() - n_own];
+        let packed = |k: usize| {
+            let mut row = empty;
+            for (e, i) in (p_off[k]..p_off[k + 1]).enumerate() {
+                row[2 * e] = f64::from(p_col[i]);
+                row[2 * e + 1] = p_val[i];
             }
-            acc.clear();
-            acc.add(agg[k], 1.0 - omega);
-            let s = omega / diag[k];
-            a.row_entries(k, |c, v| {
-                let g = agg[c];
-                if g != NONE {
-                    acc.add(g, -s * v);
-                }
-            });
-            let buf = acc.take();
-            if buf.len() > P_WIDTH {
-                // The largest entries (ties by aggregate), then back in aggregate order.
-                buf.sort_by(|x, y| y.1.abs().total_cmp(&x.1.abs()).then(x.0.cmp(&y.0)));
-                buf.truncate(P_WIDTH);
-                buf.sort_by_key(|e| e.0);
-            }
-            for (e, &(g, v)) in buf.iter().enumerate() {
-                row[2 * e] = f64::from(g);
-                row[2 * e + 1] = v;
-            }
-        }
-        halo.exchange(comm, &mut rows);
-        let (mut p_off, mut p_col, mut p_val) = (vec![0], Vec::new(), Vec::new());
-        for row in &rows {
+            row
+        };
+        halo.exchange_from(comm, packed, &mut ghost_rows, n_own);
+        for row in &ghost_rows {
             for e in 0..P_WIDTH {
                 let g = row[2 * e] as u32;
                 if g != NONE {
@@ -222,7 +229,7 @@ impl CoarseOp {
             }
             p_off.push(p_col.len());
         }
-        drop(rows);
+        drop(ghost_rows);
         // A P on the owned rows.
         let (mut off, mut col, mut val) = (vec![0], Vec::new(), Vec::new());
         for k in 0..n_own {
@@ -377,6 +384,24 @@ impl CoarseOp {
             }
         }
         project(r);
+    }
+
+    /// z += P c on the owned unknowns, and r · r and r · z after it, in the same pass.
+    pub fn add_prolonged_dot(&self, c: &[V3], r: &[V3], z: &mut [V3]) -> [f64; 2] {
+        let (mut rr, mut rz) = (0.0, 0.0);
+        for (k, (zk, rk)) in z.iter_mut().zip(r).enumerate() {
+            for e in self.p_off[k]..self.p_off[k + 1] {
+                let (g, p) = (self.p_col[e] as usize, self.p_val[e]);
+                for q in 0..3 {
+                    zk[q] += p * c[g][q];
+                }
+            }
+            for q in 0..3 {
+                rr += rk[q] * rk[q];
+                rz += rk[q] * zk[q];
+            }
+        }
+        [rr, rz]
     }
 
     /// z += P c on the owned unknowns.

@@ -85,40 +85,47 @@ impl Halo {
         self.exchange_overlapped(comm, v, |_| {});
     }
 
+    /// Fills `ghosts` (the ghost entries of a local vector from entry `first` on) with
+    /// their owners' entries `owned(e)`, blocking: [`Halo::exchange`] of a vector whose
+    /// owned entries are held apart, or made on demand for the entries sent only.
+    pub fn exchange_from<const W: usize>(
+        &self,
+        comm: &Comm,
+        owned: impl Fn(usize) -> [f64; W],
+        ghosts: &mut [[f64; W]],
+        first: usize,
+    ) {
+        let rbuf = transfer(comm, &self.send, &self.recv, owned, || {});
+        for (e, val) in received::<W>(&self.recv, &rbuf) {
+            ghosts[e - first].copy_from_slice(val);
+        }
+    }
+
     /// Adds the ghost entries of `v` into their owners' entries (the reverse of
     /// [`Halo::exchange`]: each rank sends its ghosts' values to their owners, which add
     /// them in rank order); the ghost entries are left as they are.
     pub fn accumulate<const W: usize>(&self, comm: &Comm, v: &mut [[f64; W]]) {
-        let packed: Vec<Vec<f64>> = self
-            .recv
-            .iter()
-            .map(|(_, l)| l.iter().flat_map(|&e| v[e as usize]).collect())
-            .collect();
-        let total: usize = self.send.iter().map(|s| s.1.len() * W).sum();
-        let mut rbuf = vec![0.0f64; total];
-        scope(|sc| {
-            let mut reqs: Vec<Request<'_, [f64], _>> = Vec::new();
-            let mut rest = &mut rbuf[..];
-            for (r, l) in &self.send {
-                let (a, b) = rest.split_at_mut(l.len() * W);
-                rest = b;
-                reqs.push(comm.process_at_rank(*r).immediate_receive_into(sc, a));
+        let rbuf = transfer(comm, &self.recv, &self.send, |e| v[e], || {});
+        for (e, val) in received::<W>(&self.send, &rbuf) {
+            for (d, s) in v[e].iter_mut().zip(val) {
+                *d += s;
             }
-            for ((r, _), buf) in self.recv.iter().zip(&packed) {
-                reqs.push(comm.process_at_rank(*r).immediate_send(sc, &buf[..]));
-            }
-            for q in reqs {
-                q.wait_without_status();
-            }
-        });
-        let mut at = 0;
-        for (_, l) in &self.send {
-            for &e in l {
-                let dst = &mut v[e as usize];
-                for (d, s) in dst.iter_mut().zip(&rbuf[at..at + W]) {
-                    *d += s;
-                }
-                at += W;
+        }
+    }
+
+    /// [`Halo::accumulate`] of a vector held in two pieces: `ghosts` (its ghost entries
+    /// from entry `first` on) added into their owners' entries of `owned`.
+    pub fn accumulate_into<const W: usize>(
+        &self,
+        comm: &Comm,
+        ghosts: &[[f64; W]],
+        first: usize,
+        owned: &mut [[f64; W]],
+    ) {
+        let rbuf = transfer(comm, &self.recv, &self.send, |e| ghosts[e - first], || {});
+        for (e, val) in received::<W>(&self.send, &rbuf) {
+            for (d, s) in owned[e].iter_mut().zip(val) {
+                *d += s;
             }
         }
     }
@@ -129,36 +136,55 @@ impl Halo {
     where
         F: FnOnce(&[[f64; W]]),
     {
-        let packed: Vec<Vec<f64>> = self
-            .send
-            .iter()
-            .map(|(_, l)| l.iter().flat_map(|&e| v[e as usize]).collect())
-            .collect();
-        let total: usize = self.recv.iter().map(|r| r.1.len() * W).sum();
-        let mut rbuf = vec![0.0f64; total];
-        scope(|sc| {
-            let mut reqs: Vec<Request<'_, [f64], _>> = Vec::new();
-            let mut rest = &mut rbuf[..];
-            for (r, l) in &self.recv {
-                let (a, b) = rest.split_at_mut(l.len() * W);
-                rest = b;
-                reqs.push(comm.process_at_rank(*r).immediate_receive_into(sc, a));
-            }
-            for ((r, _), buf) in self.send.iter().zip(&packed) {
-                reqs.push(comm.process_at_rank(*r).immediate_send(sc, &buf[..]));
-            }
-            work(v);
-            for q in reqs {
-                q.wait_without_status();
-            }
-        });
-        let mut at = 0;
-        for (_, l) in &self.recv {
-            for &e in l {
-                let dst = &mut v[e as usize];
-                dst.copy_from_slice(&rbuf[at..at + W]);
-                at += W;
-            }
+        let rbuf = transfer(comm, &self.send, &self.recv, |e| v[e], || work(v));
+        for (e, val) in received::<W>(&self.recv, &rbuf) {
+            v[e].copy_from_slice(val);
         }
     }
+}
+
+/// Sends to each rank of `out` the values `value(e)` of its entries, and receives from
+/// each rank of `inn` the values of its entries, in one buffer in the order of `inn`;
+/// `work` runs while the messages travel.
+fn transfer<const W: usize>(
+    comm: &Comm,
+    out: &[(i32, Vec<u32>)],
+    inn: &[(i32, Vec<u32>)],
+    value: impl Fn(usize) -> [f64; W],
+    work: impl FnOnce(),
+) -> Vec<f64> {
+    let packed: Vec<Vec<f64>> = out
+        .iter()
+        .map(|(_, l)| l.iter().flat_map(|&e| value(e as usize)).collect())
+        .collect();
+    let total: usize = inn.iter().map(|r| r.1.len() * W).sum();
+    let mut rbuf = vec![0.0f64; total];
+    scope(|sc| {
+        let mut reqs: Vec<Request<'_, [f64], _>> = Vec::new();
+        let mut rest = &mut rbuf[..];
+        for (r, l) in inn {
+            let (a, b) = rest.split_at_mut(l.len() * W);
+            rest = b;
+            reqs.push(comm.process_at_rank(*r).immediate_receive_into(sc, a));
+        }
+        for ((r, _), buf) in out.iter().zip(&packed) {
+            reqs.push(comm.process_at_rank(*r).immediate_send(sc, &buf[..]));
+        }
+        work();
+        for q in reqs {
+            q.wait_without_status();
+        }
+    });
+    rbuf
+}
+
+/// The entries of `lists` and their values in `rbuf` (as [`transfer`] received them).
+fn received<'a, const W: usize>(
+    lists: &'a [(i32, Vec<u32>)],
+    rbuf: &'a [f64],
+) -> impl Iterator<Item = (usize, &'a [f64])> {
+    lists
+        .iter()
+        .flat_map(|l| l.1.iter().map(|&e| e as usize))
+        .zip(rbuf.chunks_exact(W))
 }

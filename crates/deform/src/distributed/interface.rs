@@ -45,7 +45,7 @@ pub(crate) struct Scratch {
     z1: Vec<V3>,
     /// r − A z₁.
     r1: Vec<V3>,
-    /// z₂ with its ghosts.
+    /// The ghosts of z₂ (its owned entries are the caller's z).
     z2: Vec<V3>,
     /// S (r − A z₂).
     s2: Vec<V3>,
@@ -57,7 +57,7 @@ impl Scratch {
         Self {
             z1: vec![[0.0; 3]; n_all],
             r1: vec![[0.0; 3]; n_own],
-            z2: vec![[0.0; 3]; n_all],
+            z2: vec![[0.0; 3]; n_all - n_own],
             s2: vec![[0.0; 3]; n_own],
         }
     }
@@ -99,22 +99,23 @@ impl Interface {
         Self { band, weight, near }
     }
 
-    /// (A x)_k for owned row `k` of `own` and `ghost`, `x` over the local unknowns.
-    fn row(own: &SymMatrix<f32>, ghost: &Csr, k: usize, x: &[V3]) -> V3 {
-        let mut s = own.row_mul(k, x);
+    /// (A x)_k for owned row `k` of `own` and `ghost`, `x` over the local unknowns held
+    /// in two pieces: its owned entries `x_own`, then its ghost ones `x_ghost`.
+    fn row(own: &SymMatrix<f32>, ghost: &Csr, k: usize, x_own: &[V3], x_ghost: &[V3]) -> V3 {
+        let mut s = own.row_mul(k, x_own);
         let (c, v) = ghost.row(k);
+        let n = x_own.len();
         for (&c, &v) in c.iter().zip(v) {
             for q in 0..3 {
-                s[q] += v * x[c as usize][q];
+                s[q] += v * x_ghost[c as usize - n][q];
             }
         }
         s
     }
 
     /// z = S r + B (r − A S r), then z += S (r − A z) (see the module's doc), each step
-    /// projected by `project`; `block(r, z)` applies the block preconditioner and `exchange`
-    /// brings a local vector's ghosts from their owners (collective: every rank of an
-    /// overlapping preconditioner calls it, with a band or not).
+    /// projected by `project`: [`Interface::before`], `block(r₁, z)` (the block
+    /// preconditioner), [`Interface::after`].
     #[allow(clippy::too_many_arguments)]
     pub fn apply(
         &self,
@@ -125,37 +126,73 @@ impl Interface {
         z: &mut [V3],
         project: impl Fn(&mut [V3]),
         exchange: impl Fn(&mut [V3]),
+        exchange_from: impl Fn(&[V3], &mut [V3]),
         block: impl FnOnce(&[V3], &mut [V3]),
     ) {
-        let n = r.len();
+        let mut r1 = std::mem::take(&mut s.r1);
+        r1.copy_from_slice(r);
+        self.before(own, ghost, s, &mut r1, &project, exchange);
+        block(&r1, z);
+        s.r1 = r1;
+        project(z);
+        self.after(own, ghost, s, r, z, &project, exchange_from);
+    }
+
+    /// The sweep's first half: z₁ = S r on the band, projected (its ghosts brought by
+    /// `exchange`, collective), and `r1`, which holds r, becomes r − A z₁, projected: the
+    /// block preconditioner's residual.
+    pub fn before(
+        &self,
+        own: &SymMatrix<f32>,
+        ghost: &Csr,
+        s: &mut Scratch,
+        r1: &mut [V3],
+        project: impl Fn(&mut [V3]),
+        exchange: impl Fn(&mut [V3]),
+    ) {
+        let n = r1.len();
         for (&k, &w) in self.band.iter().zip(&self.weight) {
             let k = k as usize;
-            s.z1[k] = r[k].map(|v| w * v);
+            s.z1[k] = r1[k].map(|v| w * v);
         }
         project(&mut s.z1[..n]);
         exchange(&mut s.z1);
-        s.r1.copy_from_slice(r);
+        let (z1, z1_ghost) = s.z1.split_at(n);
         for &k in &self.near {
             let k = k as usize;
-            let a = Self::row(own, ghost, k, &s.z1);
+            let a = Self::row(own, ghost, k, z1, z1_ghost);
             for q in 0..3 {
-                s.r1[k][q] -= a[q];
+                r1[k][q] -= a[q];
             }
         }
-        project(&mut s.r1);
-        block(&s.r1, z);
-        project(z);
+        project(r1);
+    }
+
+    /// The sweep's second half: `z`, which holds the block's projected correction, becomes
+    /// z₂ = z + z₁, then z₂ + S (r − A z₂), projected; `exchange_from(z, ghosts)` brings
+    /// the ghosts of z from their owners (collective).
+    #[allow(clippy::too_many_arguments)]
+    pub fn after(
+        &self,
+        own: &SymMatrix<f32>,
+        ghost: &Csr,
+        s: &mut Scratch,
+        r: &[V3],
+        z: &mut [V3],
+        project: impl Fn(&mut [V3]),
+        exchange_from: impl Fn(&[V3], &mut [V3]),
+    ) {
+        let n = r.len();
         for &k in &self.band {
             let k = k as usize;
             for q in 0..3 {
                 z[k][q] += s.z1[k][q];
             }
         }
-        s.z2[..n].copy_from_slice(z);
-        exchange(&mut s.z2);
+        exchange_from(z, &mut s.z2);
         for (&k, &w) in self.band.iter().zip(&self.weight) {
             let k = k as usize;
-            let a = Self::row(own, ghost, k, &s.z2);
+            let a = Self::row(own, ghost, k, z, &s.z2);
             s.s2[k] = [0, 1, 2].map(|q| w * (r[k][q] - a[q]));
         }
         project(&mut s.s2);
@@ -230,6 +267,7 @@ mod tests {
             }
         };
         let exchange = |v: &mut [V3]| v[n..].fill([0.0; 3]);
+        let exchange_from = |_: &[V3], g: &mut [V3]| g.fill([0.0; 3]);
         f.apply(
             a,
             g,
@@ -238,6 +276,7 @@ mod tests {
             &mut z,
             |v| cons.project(v),
             exchange,
+            exchange_from,
             block,
         );
         // The scratch is zero off the band again.

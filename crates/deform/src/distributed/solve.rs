@@ -304,18 +304,8 @@ impl DistOperator {
                 m.apply_dot(r, z, &mut w.work);
             }
             Block::Overlap(m, _, wt) => {
-                let n = self.n_own;
-                w.r_ext[..n].copy_from_slice(r);
-                halo.exchange(comm, &mut w.r_ext);
-                for (v, &c) in w.r_ext.iter_mut().zip(wt) {
-                    *v = [c * v[0], c * v[1], c * v[2]];
-                }
-                m.apply_dot(&w.r_ext, &mut w.z_ext, &mut w.work);
-                for (v, &c) in w.z_ext.iter_mut().zip(wt) {
-                    *v = [c * v[0], c * v[1], c * v[2]];
-                }
-                halo.accumulate(comm, &mut w.z_ext);
-                z.copy_from_slice(&w.z_ext[..n]);
+                w.r_ext[..self.n_own].copy_from_slice(r);
+                Self::overlap_block(comm, halo, m, wt, w, z);
             }
             Block::Jacobi(m, _) => {
                 m.apply_dot(r, z, &mut w.work);
@@ -330,9 +320,48 @@ impl DistOperator {
         }
     }
 
+    /// z = Σ_i R_iᵀ W_i B_i W_i R_i r (see [`DistOperator::new`]), the owned r in
+    /// `w.r_ext` (collective). W_i R_i r and the multigrid's first smoothing pass are one
+    /// pass over the extended block, W_i's product and the copy to `z` another.
+    fn overlap_block(
+        comm: &Comm,
+        halo: &Halo,
+        m: &Amg<'static, f32>,
+        wt: &[f64],
+        w: &mut Work,
+        z: &mut [V3],
+    ) {
+        let n = z.len();
+        halo.exchange(comm, &mut w.r_ext);
+        let scale = |v: &V3, c: f64| [c * v[0], c * v[1], c * v[2]];
+        match m.first_pass() {
+            Some(first) => {
+                for (k, ((v, x), &c)) in w.r_ext.iter_mut().zip(&mut w.work).zip(wt).enumerate() {
+                    *v = scale(v, c);
+                    *x = scale(v, first.at(k));
+                }
+                m.apply_dot_prescaled(&w.r_ext, &mut w.z_ext, &mut w.work);
+            }
+            None => {
+                for (v, &c) in w.r_ext.iter_mut().zip(wt) {
+                    *v = scale(v, c);
+                }
+                m.apply_dot(&w.r_ext, &mut w.z_ext, &mut w.work);
+            }
+        }
+        for ((zk, v), &c) in z.iter_mut().zip(&w.z_ext).zip(wt) {
+            *zk = scale(v, c);
+        }
+        for (v, &c) in w.z_ext[n..].iter_mut().zip(&wt[n..]) {
+            *v = scale(v, c);
+        }
+        halo.accumulate_into(comm, &w.z_ext[n..], n, z);
+    }
+
     /// z = M r (projected), M the block preconditioner B alone, or with the coarse-grid
     /// correction Q = P A_c⁻¹ Pᵀ: M = Q + (I − Q A) B (A-DEF2, see [`super::coarse`];
-    /// collective).
+    /// collective); returns r · r and r · z on this rank's owned unknowns (with the
+    /// coarse-grid correction, from its last pass over z).
     fn precondition(
         &self,
         comm: &Comm,
@@ -341,17 +370,39 @@ impl DistOperator {
         r: &[V3],
         z: &mut [V3],
         w: &mut Work,
-    ) {
-        match (&self.interface, w.sweep.take()) {
-            (Some(f), Some(mut s)) => {
+    ) -> [f64; 2] {
+        let n = self.n_own;
+        let project = |v: &mut [V3]| cons.project(v);
+        let exchange = |v: &mut [V3]| halo.exchange(comm, v);
+        let exchange_from = |v: &[V3], g: &mut [V3]| halo.exchange_from(comm, |e| v[e], g, n);
+        match (&self.interface, &self.block, w.sweep.take()) {
+            // The block's residual formed in place in the extended block's.
+            (Some(f), Block::Overlap(m, _, wt), Some(mut s)) => {
+                let own = self.own();
+                w.r_ext[..n].copy_from_slice(r);
+                f.before(
+                    own,
+                    &self.ghost,
+                    &mut s,
+                    &mut w.r_ext[..n],
+                    project,
+                    exchange,
+                );
+                Self::overlap_block(comm, halo, m, wt, w, z);
+                project(z);
+                f.after(own, &self.ghost, &mut s, r, z, project, exchange_from);
+                w.sweep = Some(s);
+            }
+            (Some(f), _, Some(mut s)) => {
                 f.apply(
                     self.own(),
                     &self.ghost,
                     &mut s,
                     r,
                     z,
-                    |v| cons.project(v),
-                    |v| halo.exchange(comm, v),
+                    project,
+                    exchange,
+                    exchange_from,
                     |r, z| self.block(comm, halo, r, z, w),
                 );
                 w.sweep = Some(s);
@@ -363,8 +414,9 @@ impl DistOperator {
         }
         if let Some(coarse) = &self.coarse {
             let c = coarse.coarse_of(comm, r, Some(z));
-            coarse.add_prolonged(&c, z);
+            return coarse.add_prolonged_dot(&c, r, z);
         }
+        [dot(r, r), dot(r, z)]
     }
 
     /// r = Π(b − A x) (`full[..n]` receives x); returns |r|² over the ranks.
@@ -450,8 +502,10 @@ impl DistOperator {
         };
         let mut it = 0;
         if rr.sqrt() > rel_tol * scale {
-            self.precondition(comm, halo, cons, &r, &mut z, &mut w);
-            let mut rz = sum(comm, dot(&r, &z));
+            let mut rz = sum(
+                comm,
+                self.precondition(comm, halo, cons, &r, &mut z, &mut w)[1],
+            );
             full[..n].copy_from_slice(&z);
             while it < opts.max_iters {
                 it += 1;
@@ -462,8 +516,8 @@ impl DistOperator {
                 cons.project(&mut q);
                 let alpha = rz / pq;
                 axpy(-alpha, &q, &mut r);
-                self.precondition(comm, halo, cons, &r, &mut z, &mut w);
-                let [rr, rz_new] = sum_n(comm, [dot(&r, &r), dot(&r, &z)]);
+                let dots = self.precondition(comm, halo, cons, &r, &mut z, &mut w);
+                let [rr, rz_new] = sum_n(comm, dots);
                 if rr.sqrt() <= rel_tol * scale || it == opts.max_iters {
                     axpy(alpha, &full[..n], x);
                     break;
