@@ -96,6 +96,10 @@ pub struct Deformer<'c> {
     /// The coarse space, made at the first deformation and kept (it depends on the
     /// baseline grid and the unknowns only).
     coarse: std::cell::OnceCell<Option<CoarseSpace>>,
+    /// The cells this rank counts ([`counted_cells`]) and the baseline grid's quality over
+    /// the ranks (summary, least quality, inverted cells): every deformation's "before",
+    /// made at the first and kept.
+    baseline: std::cell::OnceCell<(Mesh, (Summary, f64, u64))>,
     /// Eq. 21's operator on the baseline grid with its free block multigrid (Eq. 26's) in
     /// place and the constrained one (Eq. 21's) beside it: what every first increment
     /// builds, kept from the last one (the serial `Deformer` keeps its baseline operator
@@ -305,6 +309,7 @@ impl<'c> Deformer<'c> {
             wall_distance: None,
             runs: std::cell::Cell::new(0),
             coarse: std::cell::OnceCell::new(),
+            baseline: std::cell::OnceCell::new(),
             base: std::cell::RefCell::new(None),
         })
     }
@@ -401,10 +406,10 @@ impl<'c> Deformer<'c> {
     /// (`BoundaryConditions::displacements`, in the order the set-up was given them), the
     /// rest of the motion (rigid markers) as set up; `None`: those of the set-up, as
     /// [`Deformer::deform`]. The partition, the nodes' roles, the unknowns, their halos, the
-    /// coarse space and the baseline grid's operator with its block multigrids are kept: an
-    /// optimiser's loop, whose wall moves anew at each design, pays for them once. Which
-    /// nodes are displaced is the set-up's: a node left out of it stays where its role
-    /// holds it.
+    /// coarse space, the baseline grid's quality and its operator with its block multigrids
+    /// are kept: an optimiser's loop, whose wall moves anew at each design, pays for them
+    /// once. Which nodes are displaced is the set-up's: a node left out of it stays where
+    /// its role holds it.
     ///
     /// For a set-up made on rank 0 ([`Deformer::from_root`]), `displacements` are read on
     /// rank 0 (the whole grid's list; the other ranks pass `None` or anything); for a given
@@ -502,8 +507,13 @@ impl<'c> Deformer<'c> {
         rep.seconds.setup = self.setup + max(comm, t.elapsed().as_secs_f64());
         [rep.seconds.partition, rep.seconds.own_part] = self.partition;
         let t = Instant::now();
-        let cells = counted_cells(part);
-        let (before, min0, bad0) = self.quality(&cells, x0);
+        // Collective when made, as the coarse space.
+        let (cells, (before, min0, bad0)) = self.baseline.get_or_init(|| {
+            let cells = counted_cells(part);
+            let q = self.quality(&cells, x0);
+            (cells, q)
+        });
+        let (before, min0, bad0) = (*before, *min0, *bad0);
         rep.seconds.quality += t.elapsed().as_secs_f64();
         let mut inc = 1usize;
         let slide = self.slide.as_ref();
@@ -539,7 +549,7 @@ impl<'c> Deformer<'c> {
                 }
             }
             let t = Instant::now();
-            let (after, min1, bad1) = self.quality(&cells, &cur);
+            let (after, min1, bad1) = self.quality(cells, &cur);
             rep.seconds.quality += t.elapsed().as_secs_f64();
             let low = min1 < opts.min_quality_ratio * min0;
             if (bad1 > bad0 || low) && inc < opts.max_increments {
