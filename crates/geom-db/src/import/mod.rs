@@ -97,12 +97,19 @@ pub enum Error {
         reason: String,
     },
     /// The database built from the file does not validate.
-    #[error("{file}: the imported model does not validate: {source}")]
+    #[error(
+        "{file}: the imported model does not validate: {source}{}",
+        from.as_ref().map_or(String::new(), |f| format!(", made from {f}"))
+    )]
     Invalid {
         /// The CAD file.
         file: String,
         /// The validation error.
         source: Box<crate::Error>,
+        /// The file's entity the item at fault was made from (`entity D37 (126)`, `the
+        /// domain boundary of entity #12 (B_SPLINE_SURFACE_WITH_KNOTS)`), when known: a
+        /// support curve's or surface's source.
+        from: Option<String>,
     },
 }
 

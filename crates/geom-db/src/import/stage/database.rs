@@ -19,6 +19,7 @@ use super::shells::Shells;
 use crate::curve::Arc;
 use crate::curve::SupportCurve;
 use crate::db::GeomDb;
+use crate::error::Entity;
 use crate::eval::{ParamCurve, ParamSurface};
 use crate::ids::{CornerId, CurveCompId, CurveId, SurfaceId};
 use crate::invert::{InvertOptions, SurfaceInverter};
@@ -49,8 +50,17 @@ pub(crate) fn run(
             name: String::new(),
         })
         .collect();
+    // Per support curve, the file's entity it was made from (for messages).
+    let mut curve_from = Vec::with_capacity(sewn.edges.len());
     for (k, s) in sewn.edges.iter().enumerate() {
         let ed = &edges.edges[s.master];
+        curve_from.push(match &ed.src {
+            Some(src) => format!("entity {}", src.describe()),
+            None => format!(
+                "the domain boundary of {}",
+                surface_from(model, faces, faces.faces[ed.face].support)
+            ),
+        });
         let name = match &ed.src {
             Some(src) => src.describe(),
             None => format!(
@@ -193,18 +203,52 @@ pub(crate) fn run(
             oriented.conflicts
         ));
     }
-    db.validate().map_err(|e| Error::Invalid {
-        file: model.file.clone(),
-        source: Box::new(e),
-    })?;
-    if opts.control_nodes {
-        db.assign_control_nodes().map_err(|e| Error::Invalid {
-            file: model.file.clone(),
-            source: Box::new(e),
-        })?;
+    db.validate()
+        .map_err(|e| invalid(model, faces, &curve_from, &db, e))?;
+    if opts.control_nodes
+        && let Err(e) = db.assign_control_nodes()
+    {
+        return Err(invalid(model, faces, &curve_from, &db, e));
     }
     db.refresh_baseline();
     Ok((db, rep))
+}
+
+/// The file's entity support surface `i` was made from.
+fn surface_from(model: &CadModel, faces: &Faces, i: usize) -> String {
+    let src = &model.surfaces[faces.supports[i].model_surface].source;
+    format!("entity {}", src.describe())
+}
+
+/// The import's error for the database's error `e`, naming the file's entity the item at
+/// fault was made from when it is a support curve (`curve_from`), a curve component (its
+/// curve's) or a support surface.
+fn invalid(
+    model: &CadModel,
+    faces: &Faces,
+    curve_from: &[String],
+    db: &GeomDb,
+    e: crate::Error,
+) -> Error {
+    let from = match &e {
+        crate::Error::Invalid { entity, .. } => match *entity {
+            Entity::Curve(c) | Entity::Arc { curve: c, .. } => curve_from.get(c.index()).cloned(),
+            Entity::CurveComp(k) => db
+                .curve_components
+                .get(k.index())
+                .and_then(|cc| curve_from.get(cc.curve.index()).cloned()),
+            Entity::Surface(s) | Entity::Patch { surface: s, .. } => {
+                (s.index() < faces.supports.len()).then(|| surface_from(model, faces, s.index()))
+            }
+            _ => None,
+        },
+        _ => None,
+    };
+    Error::Invalid {
+        file: model.file.clone(),
+        source: Box::new(e),
+        from,
+    }
 }
 
 /// Reverses a surface component: its loops run backwards and its inward normal turns.
