@@ -99,89 +99,64 @@ impl Interface {
         Self { band, weight, near }
     }
 
-    /// (A x)_k for owned row `k` of `own` and `ghost`, `x` over the local unknowns held
-    /// in two pieces: its owned entries `x_own`, then its ghost ones `x_ghost`.
-    fn row(own: &SymMatrix<f32>, ghost: &Csr, k: usize, x_own: &[V3], x_ghost: &[V3]) -> V3 {
-        let mut s = own.row_mul(k, x_own);
-        let (c, v) = ghost.row(k);
-        let n = x_own.len();
-        for (&c, &v) in c.iter().zip(v) {
-            for q in 0..3 {
-                s[q] += v * x_ghost[c as usize - n][q];
-            }
-        }
-        s
-    }
-
     /// z = S r + B (r − A S r), then z += S (r − A z) (see the module's doc), each step
-    /// projected by `project`: [`Interface::before`], `block(r₁, z)` (the block
-    /// preconditioner), [`Interface::after`].
-    #[allow(clippy::too_many_arguments)]
-    pub fn apply(
+    /// projected: [`Interface::before`], `block(r₁, z)` (the block preconditioner),
+    /// [`Interface::after`].
+    pub fn apply<P, E, F>(
         &self,
-        own: &SymMatrix<f32>,
-        ghost: &Csr,
+        ops: &Ops<'_, P, E, F>,
         s: &mut Scratch,
         r: &[V3],
         z: &mut [V3],
-        project: impl Fn(&mut [V3]),
-        exchange: impl Fn(&mut [V3]),
-        exchange_from: impl Fn(&[V3], &mut [V3]),
         block: impl FnOnce(&[V3], &mut [V3]),
-    ) {
+    ) where
+        P: Fn(&mut [V3]),
+        E: Fn(&mut [V3]),
+        F: Fn(&[V3], &mut [V3]),
+    {
         let mut r1 = std::mem::take(&mut s.r1);
         r1.copy_from_slice(r);
-        self.before(own, ghost, s, &mut r1, &project, exchange);
+        self.before(ops, s, &mut r1);
         block(&r1, z);
         s.r1 = r1;
-        project(z);
-        self.after(own, ghost, s, r, z, &project, exchange_from);
+        (ops.project)(z);
+        self.after(ops, s, r, z);
     }
 
     /// The sweep's first half: z₁ = S r on the band, projected (its ghosts brought by
-    /// `exchange`, collective), and `r1`, which holds r, becomes r − A z₁, projected: the
-    /// block preconditioner's residual.
-    pub fn before(
-        &self,
-        own: &SymMatrix<f32>,
-        ghost: &Csr,
-        s: &mut Scratch,
-        r1: &mut [V3],
-        project: impl Fn(&mut [V3]),
-        exchange: impl Fn(&mut [V3]),
-    ) {
+    /// `ops.exchange`, collective), and `r1`, which holds r, becomes r − A z₁, projected:
+    /// the block preconditioner's residual.
+    pub fn before<P, E, F>(&self, ops: &Ops<'_, P, E, F>, s: &mut Scratch, r1: &mut [V3])
+    where
+        P: Fn(&mut [V3]),
+        E: Fn(&mut [V3]),
+    {
         let n = r1.len();
         for (&k, &w) in self.band.iter().zip(&self.weight) {
             let k = k as usize;
             s.z1[k] = r1[k].map(|v| w * v);
         }
-        project(&mut s.z1[..n]);
-        exchange(&mut s.z1);
+        (ops.project)(&mut s.z1[..n]);
+        (ops.exchange)(&mut s.z1);
         let (z1, z1_ghost) = s.z1.split_at(n);
         for &k in &self.near {
             let k = k as usize;
-            let a = Self::row(own, ghost, k, z1, z1_ghost);
+            let a = ops.row(k, z1, z1_ghost);
             for q in 0..3 {
                 r1[k][q] -= a[q];
             }
         }
-        project(r1);
+        (ops.project)(r1);
     }
 
     /// The sweep's second half: `z`, which holds the block's projected correction, becomes
-    /// z₂ = z + z₁, then z₂ + S (r − A z₂), projected; `exchange_from(z, ghosts)` brings
-    /// the ghosts of z from their owners (collective).
-    #[allow(clippy::too_many_arguments)]
-    pub fn after(
-        &self,
-        own: &SymMatrix<f32>,
-        ghost: &Csr,
-        s: &mut Scratch,
-        r: &[V3],
-        z: &mut [V3],
-        project: impl Fn(&mut [V3]),
-        exchange_from: impl Fn(&[V3], &mut [V3]),
-    ) {
+    /// z₂ = z + z₁, then z₂ + S (r − A z₂), projected; `ops.exchange_from(z, ghosts)`
+    /// brings the ghosts of z from their owners (collective).
+    pub fn after<P, E, F>(&self, ops: &Ops<'_, P, E, F>, s: &mut Scratch, r: &[V3], z: &mut [V3])
+    where
+        P: Fn(&mut [V3]),
+        F: Fn(&[V3], &mut [V3]),
+    {
         let n = r.len();
         for &k in &self.band {
             let k = k as usize;
@@ -189,13 +164,13 @@ impl Interface {
                 z[k][q] += s.z1[k][q];
             }
         }
-        exchange_from(z, &mut s.z2);
+        (ops.exchange_from)(z, &mut s.z2);
         for (&k, &w) in self.band.iter().zip(&self.weight) {
             let k = k as usize;
-            let a = Self::row(own, ghost, k, z, &s.z2);
+            let a = ops.row(k, z, &s.z2);
             s.s2[k] = [0, 1, 2].map(|q| w * (r[k][q] - a[q]));
         }
-        project(&mut s.s2);
+        (ops.project)(&mut s.s2);
         for &k in &self.band {
             let k = k as usize;
             for q in 0..3 {
@@ -205,6 +180,39 @@ impl Interface {
             s.s2[k] = [0.0; 3];
         }
         s.z1[n..].fill([0.0; 3]);
+    }
+}
+
+/// What the sweep needs of its caller: the owned rows of A (`own`, the owned–owned block,
+/// and `ghost`, their ghost columns), the constraints' projection, and the halo: `exchange`
+/// fills a local vector's ghosts from their owners, `exchange_from(owned, ghosts)` those of
+/// a vector held in two pieces (both collective).
+pub(crate) struct Ops<'a, P, E, F> {
+    /// The owned–owned block of A.
+    pub own: &'a SymMatrix<f32>,
+    /// The ghost columns of A's owned rows.
+    pub ghost: &'a Csr,
+    /// The constraints' projection.
+    pub project: P,
+    /// The halo exchange of a local vector.
+    pub exchange: E,
+    /// The halo exchange of a vector held in two pieces.
+    pub exchange_from: F,
+}
+
+impl<P, E, F> Ops<'_, P, E, F> {
+    /// (A x)_k for owned row `k`, `x` over the local unknowns held in two pieces: its owned
+    /// entries `x_own`, then its ghost ones `x_ghost`.
+    fn row(&self, k: usize, x_own: &[V3], x_ghost: &[V3]) -> V3 {
+        let mut s = self.own.row_mul(k, x_own);
+        let (c, v) = self.ghost.row(k);
+        let n = x_own.len();
+        for (&c, &v) in c.iter().zip(v) {
+            for q in 0..3 {
+                s[q] += v * x_ghost[c as usize - n][q];
+            }
+        }
+        s
     }
 }
 
@@ -268,17 +276,14 @@ mod tests {
         };
         let exchange = |v: &mut [V3]| v[n..].fill([0.0; 3]);
         let exchange_from = |_: &[V3], g: &mut [V3]| g.fill([0.0; 3]);
-        f.apply(
-            a,
-            g,
-            &mut s,
-            r,
-            &mut z,
-            |v| cons.project(v),
+        let ops = Ops {
+            own: a,
+            ghost: g,
+            project: |v: &mut [V3]| cons.project(v),
             exchange,
             exchange_from,
-            block,
-        );
+        };
+        f.apply(&ops, &mut s, r, &mut z, block);
         // The scratch is zero off the band again.
         assert!(s.z1.iter().chain(&s.s2).all(|v| *v == [0.0; 3]));
         z

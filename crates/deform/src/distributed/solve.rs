@@ -15,7 +15,7 @@ use sparse::{Constraints, Csr, Jacobi, Preconditioner, SolveReport, SymMatrix};
 use super::coarse::CoarseOp;
 use super::comm::{Comm, agree, max, sum, sum_n};
 use super::halo::Halo;
-use super::interface::{Interface, Scratch};
+use super::interface::{Interface, Ops, Scratch};
 use crate::assembly::{System, assemble, couplings};
 use crate::error::Result;
 use crate::options::{DeformOptions, SolverKind};
@@ -372,39 +372,25 @@ impl DistOperator {
         w: &mut Work,
     ) -> [f64; 2] {
         let n = self.n_own;
-        let project = |v: &mut [V3]| cons.project(v);
-        let exchange = |v: &mut [V3]| halo.exchange(comm, v);
-        let exchange_from = |v: &[V3], g: &mut [V3]| halo.exchange_from(comm, |e| v[e], g, n);
+        let ops = Ops {
+            own: self.own(),
+            ghost: &self.ghost,
+            project: |v: &mut [V3]| cons.project(v),
+            exchange: |v: &mut [V3]| halo.exchange(comm, v),
+            exchange_from: |v: &[V3], g: &mut [V3]| halo.exchange_from(comm, |e| v[e], g, n),
+        };
         match (&self.interface, &self.block, w.sweep.take()) {
             // The block's residual formed in place in the extended block's.
             (Some(f), Block::Overlap(m, _, wt), Some(mut s)) => {
-                let own = self.own();
                 w.r_ext[..n].copy_from_slice(r);
-                f.before(
-                    own,
-                    &self.ghost,
-                    &mut s,
-                    &mut w.r_ext[..n],
-                    project,
-                    exchange,
-                );
+                f.before(&ops, &mut s, &mut w.r_ext[..n]);
                 Self::overlap_block(comm, halo, m, wt, w, z);
-                project(z);
-                f.after(own, &self.ghost, &mut s, r, z, project, exchange_from);
+                cons.project(z);
+                f.after(&ops, &mut s, r, z);
                 w.sweep = Some(s);
             }
             (Some(f), _, Some(mut s)) => {
-                f.apply(
-                    self.own(),
-                    &self.ghost,
-                    &mut s,
-                    r,
-                    z,
-                    project,
-                    exchange,
-                    exchange_from,
-                    |r, z| self.block(comm, halo, r, z, w),
-                );
+                f.apply(&ops, &mut s, r, z, |r, z| self.block(comm, halo, r, z, w));
                 w.sweep = Some(s);
             }
             _ => {
