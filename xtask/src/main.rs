@@ -3,9 +3,11 @@
 //! Tasks: `ci` (fmt, clippy, tests, docs), `tidy` (the architecture invariants: layering,
 //! geometry and grid, no environment in libraries, file length and headers, commit subjects),
 //! `fixtures` (geometry fixtures and the chain cases' volume grids), `chain` (the default
-//! case end to end), `regress` (references, ignored tests, round trips), `bench`.
+//! case end to end), `regress` (references, ignored tests, round trips), `bench`, `bench-mpi` (the distributed
+//! deformation against the serial one).
 
 mod bench;
+mod bench_mpi;
 mod chain;
 mod fixtures;
 mod regress;
@@ -26,9 +28,10 @@ fn main() -> ExitCode {
         Some("chain") => chain::run(&root()),
         Some("regress") => regress::run(&root(), &args[1..]),
         Some("bench") => bench::run(&root(), &args[1..]),
+        Some("bench-mpi") => bench_mpi::run(&root(), &args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check the architecture invariants (ARCHITECTURE.md)\n  fixtures [--geometry-only]  write the geometry fixtures (fixtures/geom/) and the chain cases' volume grids (needs pip gmsh)\n  chain  run the default case (fixtures/cases/default) into target/chain/ and print a summary\n  regress [--bless] [--skip-ignored-tests]  chain cases against fixtures/reference/, ignored tests, meshio/Gmsh round trips\n  bench [--quick] [CRATE]...  criterion benchmarks of the crates, summary in target/bench/summary.md"
+                "usage: cargo xtask <task>\n\ntasks:\n  ci     fmt --check, clippy -D warnings, tests, docs\n  tidy   check the architecture invariants (ARCHITECTURE.md)\n  fixtures [--geometry-only]  write the geometry fixtures (fixtures/geom/) and the chain cases' volume grids (needs pip gmsh)\n  chain  run the default case (fixtures/cases/default) into target/chain/ and print a summary\n  regress [--bless] [--skip-ignored-tests]  chain cases against fixtures/reference/, ignored tests, meshio/Gmsh round trips\n  bench [--quick] [CRATE]...  criterion benchmarks of the crates, summary in target/bench/summary.md\n  bench-mpi GRID.su2 [--rounds N] [--ranks N] [--partition metis|rcb] [--given]  mpirun -n N against the serial deform, in the same rounds, summary in target/bench/mpi.md"
             );
             return ExitCode::from(2);
         }

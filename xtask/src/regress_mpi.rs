@@ -30,7 +30,7 @@ use std::process::{Command, Output};
 
 /// The motion of the wing-body test: the whole body pitched 2° about a spanwise axis,
 /// the symmetry plane sliding, solved to 1e-11.
-const FLAGS: &[&str] = &[
+pub(crate) const FLAGS: &[&str] = &[
     "--rigid",
     "wing",
     "--rigid",
@@ -72,7 +72,7 @@ pub(crate) fn mpirun(n: usize, prog: &Path, args: &[&str]) -> Result<Output, Str
     c.output().map_err(|e| format!("cannot run mpirun: {e}"))
 }
 
-fn is_root() -> bool {
+pub(crate) fn is_root() -> bool {
     Command::new("id")
         .arg("-u")
         .output()
