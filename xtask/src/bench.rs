@@ -95,7 +95,7 @@ pub fn run(root: &Path, args: &[String]) -> Result<(), String> {
 }
 
 /// The 1-minute load average, or "unknown".
-fn load_average() -> String {
+pub(crate) fn load_average() -> String {
     std::fs::read_to_string("/proc/loadavg")
         .ok()
         .and_then(|s| s.split_whitespace().next().map(str::to_string))

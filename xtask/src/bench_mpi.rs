@@ -96,7 +96,7 @@ pub fn run(root: &Path, args: &[String]) -> Result<(), String> {
     let bin = root.join("target/release/aeroshape");
     let out = root.join("target/bench-mpi");
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let load_before = load_average();
+    let load_before = crate::bench::load_average();
     let mut table = Vec::new();
     for r in 1..=rounds {
         let serial = || serial_run(&bin, &grid, &out);
@@ -127,7 +127,7 @@ pub fn run(root: &Path, args: &[String]) -> Result<(), String> {
          |---|---|---|---|---|---|---|---|---|---|\n{}\n",
         args.join(" "),
         grid.display(),
-        load_average(),
+        crate::bench::load_average(),
         table.join("\n")
     );
     println!("{text}");
@@ -273,11 +273,4 @@ fn iterations(v: &Value) -> Result<String, String> {
         number(v, &["iterations"])?,
         number(v, &["rotation_iterations"])?
     ))
-}
-
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .and_then(|s| s.split_whitespace().next().map(str::to_string))
-        .unwrap_or_else(|| "unknown".into())
 }
