@@ -123,7 +123,8 @@ pub(crate) fn deviation(x0: &[[f64; 3]], a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 
 
 /// The check of a grid written in pieces (`.pvtu`), read by VTK's own parallel reader: every
 /// node of the grid in some piece with the serial result's position (within [`REL`]), every
-/// cell in exactly one piece. Prints the counts.
+/// cell and every boundary element of each marker (`MARKER_ELEMS` of the SU2 file, the
+/// markers numbered from 1 in its order) in exactly one piece. Prints the counts.
 const PVTU_CHECK: &str = r#"
 import sys
 import numpy as np
@@ -137,9 +138,10 @@ def su2(path):
     n = int(lines[at].split("=")[1].split()[0])
     x = np.array([[float(v) for v in l.split()[:3]] for l in lines[at + 1:at + 1 + n]])
     cells = next(int(l.split("=")[1].split()[0]) for l in lines if l.strip().startswith("NELEM"))
-    return x, cells
-x0, cells = su2(grid)
-xs, _ = su2(serial)
+    marks = [int(l.split("=")[1]) for l in lines if l.strip().startswith("MARKER_ELEMS")]
+    return x, cells, marks
+x0, cells, marks = su2(grid)
+xs = su2(serial)[0]
 r = vtk.vtkXMLPUnstructuredGridReader()
 r.SetFileName(pvtu)
 r.Update()
@@ -153,9 +155,10 @@ disp = np.linalg.norm(xs - x0, axis=1).max()
 dev = np.linalg.norm(x - xs[idx], axis=1).max() / disp
 nodes = len(np.unique(idx))
 volume = int((marker == 0).sum())
-print("regress: mpi pvtu: %d pieces, %d points, %d of %d nodes, %d of %d cells, deviation from serial %.3e" % (
-    r.GetNumberOfPieces(), len(x), nodes, len(x0), volume, cells, dev))
-if dist.max() > 1e-9 * size or nodes != len(x0) or volume != cells or not dev <= float(sys.argv[4]):
+faces = np.bincount(marker.astype(int), minlength=len(marks) + 1)[1:].tolist()
+print("regress: mpi pvtu: %d pieces, %d points, %d of %d nodes, %d of %d cells, boundary elements %s of %s, deviation from serial %.3e" % (
+    r.GetNumberOfPieces(), len(x), nodes, len(x0), volume, cells, faces, marks, dev))
+if dist.max() > 1e-9 * size or nodes != len(x0) or volume != cells or faces != marks or not dev <= float(sys.argv[4]):
     sys.exit("pvtu pieces do not make up the deformed grid")
 "#;
 

@@ -103,7 +103,6 @@ pub(crate) fn parts_in(mesh: &Mesh, part: &[u32], parts: usize, order: &[u32]) -
                 }
                 let mut m = Mesh::new(mesh.dim);
                 m.coords = gids.iter().map(|&g| mesh.coords[g as usize]).collect();
-                let mut e = Vec::with_capacity(8);
                 for (gk, g) in mesh.cells.groups().iter().enumerate() {
                     // By their smallest local node: a node's cells then lie close in memory.
                     let mut by_node: Vec<(u32, u32)> = cells[q][gk]
@@ -114,12 +113,13 @@ pub(crate) fn parts_in(mesh: &Mesh, part: &[u32], parts: usize, order: &[u32]) -
                         })
                         .collect();
                     by_node.sort_unstable();
-                    for c in by_node.into_iter().map(|(_, c)| c as usize) {
-                        e.clear();
-                        e.extend(g.element(c).iter().map(|&v| local[v as usize]));
-                        m.cells.push(g.kind, &e, None);
+                    let nodes = &mut m.cells.group_mut(g.kind).nodes;
+                    nodes.reserve(by_node.len() * g.kind.n_nodes());
+                    for (_, c) in by_node {
+                        nodes.extend(g.element(c as usize).iter().map(|&v| local[v as usize]));
                     }
                 }
+                m.cells.prune();
                 for mk in &mesh.markers {
                     let mut el = Elements::new();
                     for (kind, e) in mk.elements.iter() {

@@ -145,7 +145,6 @@ impl Local {
     ) -> Result<Self> {
         let root = comm.process_at_rank(0);
         let p = comm.size() as usize;
-        type Piece = (Vec<u64>, Vec<f64>);
         let mut root_supports = Vec::new();
         let mut root_boundary = Vec::new();
         let n_bc = whole.map_or(0, |(_, bc)| bc.displacements.len());
@@ -184,10 +183,7 @@ impl Local {
             broadcast_idle(comm, &mut ok);
             made.map(|(mut pieces, how)| {
                 for (r, piece) in pieces.iter().enumerate().skip(1) {
-                    let dest = comm.process_at_rank(r as i32);
-                    dest.send(&[piece.0.len() as u64, piece.1.len() as u64][..]);
-                    dest.send(&piece.0[..]);
-                    dest.send(&piece.1[..]);
+                    piece.send(comm.process_at_rank(r as i32));
                 }
                 Some((pieces.swap_remove(0), how))
             })
@@ -195,24 +191,18 @@ impl Local {
             let mut ok = 0u64;
             broadcast_idle(comm, &mut ok);
             if ok > 0 {
-                let mut len = [0u64; 2];
-                root.receive_into(&mut len[..]);
-                let mut ints = vec![0u64; len[0] as usize];
-                let mut floats = vec![0.0f64; len[1] as usize];
-                root.receive_into(&mut ints[..]);
-                root.receive_into(&mut floats[..]);
-                Ok(Some(((ints, floats), ok)))
+                Ok(Some((Piece::receive(root), ok)))
             } else {
                 Ok(None)
             }
         };
-        let ((ints, floats), how) = agree(comm, mine)?.ok_or_else(|| Error::Distributed {
+        let (piece, how) = agree(comm, mine)?.ok_or_else(|| Error::Distributed {
             rank: 0,
             reason: "no part received".into(),
         })?;
         let t = std::time::Instant::now();
-        let (grid, mut cls, disp, disp_src) = agree(comm, decode(&ints, &floats))?;
-        drop((ints, floats));
+        let (grid, mut cls, disp, disp_src) = agree(comm, decode(&piece))?;
+        drop(piece);
         // The part's numbering is ours: its owned nodes take the serial solver's order.
         let (part, perm) = Partition::ordered(comm, grid)?;
         let mut roles = cls.roles.clone();
@@ -408,28 +398,63 @@ fn owners_roles(comm: &Comm, part: &Partition, cls: &mut Classified, disp: &mut 
     }
 }
 
-/// A part and its nodes' roles as integers and floats (what rank 0 sends).
-fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> (Vec<u64>, Vec<f64>) {
-    let n = g.mesh.n_nodes();
-    let conn: usize = g
-        .mesh
-        .cells
-        .groups()
-        .iter()
-        .map(|grp| grp.nodes.len() + 2)
-        .sum();
-    let skin: usize = cls.skin.iter().map(|e| e.len() + 1).sum();
-    let mut ints = Vec::with_capacity(5 + 3 * n + conn + skin);
-    ints.extend([n as u64, g.n_owned as u64, u64::from(g.mesh.dim)]);
-    let mut floats: Vec<f64> = Vec::with_capacity(6 * n + 10 * cls.motions.len());
-    floats.extend(g.mesh.coords.iter().flatten());
-    ints.extend(&g.global_ids);
-    ints.push(g.mesh.cells.groups().len() as u64);
-    for grp in g.mesh.cells.groups() {
+/// What rank 0 sends a rank: counts, global ids and roles as integers; the node lists of the
+/// cells, the skin and the markers' elements; coordinates and payloads as floats.
+struct Piece {
+    ints: Vec<u64>,
+    nodes: Vec<u32>,
+    floats: Vec<f64>,
+}
+
+impl Piece {
+    /// Sends the piece to `dest` (its lengths first).
+    fn send(&self, dest: mpi::topology::Process<'_>) {
+        let len = [self.ints.len(), self.nodes.len(), self.floats.len()].map(|l| l as u64);
+        dest.send(&len[..]);
+        dest.send(&self.ints[..]);
+        dest.send(&self.nodes[..]);
+        dest.send(&self.floats[..]);
+    }
+
+    /// Receives a piece sent by [`Piece::send`] from `src`.
+    fn receive(src: mpi::topology::Process<'_>) -> Self {
+        let mut len = [0u64; 3];
+        src.receive_into(&mut len[..]);
+        let mut p = Self {
+            ints: vec![0; len[0] as usize],
+            nodes: vec![0; len[1] as usize],
+            floats: vec![0.0; len[2] as usize],
+        };
+        src.receive_into(&mut p.ints[..]);
+        src.receive_into(&mut p.nodes[..]);
+        src.receive_into(&mut p.floats[..]);
+        p
+    }
+}
+
+/// Appends the groups of `el` to a piece: their count, then each group's VTK code and
+/// node count in `ints`, its nodes in `nodes`.
+fn encode_elements(el: &mesh::Elements, ints: &mut Vec<u64>, nodes: &mut Vec<u32>) {
+    ints.push(el.groups().len() as u64);
+    for grp in el.groups() {
         ints.push(u64::from(grp.kind.vtk_code()));
         ints.push(grp.nodes.len() as u64);
-        ints.extend(grp.nodes.iter().map(|&v| u64::from(v)));
+        nodes.extend_from_slice(&grp.nodes);
     }
+}
+
+/// A part and its nodes' roles as a piece (what rank 0 sends): the cells, the markers'
+/// elements whose nodes are all in the part (for a grid written in pieces) and the skin
+/// elements whose nodes are all local, in local numbering.
+fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> Piece {
+    let n = g.mesh.n_nodes();
+    let mut ints = Vec::with_capacity(3 * n + 64);
+    let mut nodes = Vec::with_capacity(g.mesh.cells.groups().iter().map(|c| c.nodes.len()).sum());
+    let mut floats: Vec<f64> = Vec::with_capacity(6 * n + 10 * cls.motions.len());
+    ints.extend([n as u64, g.n_owned as u64, u64::from(g.mesh.dim)]);
+    floats.extend(g.mesh.coords.iter().flatten());
+    ints.extend(&g.global_ids);
+    encode_elements(&g.mesh.cells, &mut ints, &mut nodes);
     // Roles, with a payload of three floats each; a displaced node's index is that of its
     // displacement in rank 0's list.
     for &gid in &g.global_ids {
@@ -452,111 +477,175 @@ fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> (Vec<u64>
         floats.extend(m.axis_dir);
         floats.extend(m.translation);
     }
-    // Skin elements whose nodes are all local, in local numbering.
-    let local: std::collections::HashMap<u64, u32> = g
-        .global_ids
-        .iter()
-        .enumerate()
-        .map(|(i, &gid)| (gid, i as u32))
-        .collect();
+    // The local number of every node of the whole grid (u32::MAX: not in the part).
+    let mut local = vec![u32::MAX; cls.roles.len()];
+    for (i, &gid) in g.global_ids.iter().enumerate() {
+        local[gid as usize] = i as u32;
+    }
     let skin: Vec<Vec<u32>> = cls
         .skin
         .iter()
         .filter_map(|e| {
             e.iter()
-                .map(|&v| local.get(&u64::from(v)).copied())
+                .map(|&v| Some(local[v as usize]).filter(|&l| l != u32::MAX))
                 .collect()
         })
         .collect();
     ints.push(skin.len() as u64);
     for e in skin {
         ints.push(e.len() as u64);
-        ints.extend(e.iter().map(|&v| u64::from(v)));
+        nodes.extend(e);
     }
-    (ints, floats)
+    ints.push(g.mesh.markers.len() as u64);
+    for mk in &g.mesh.markers {
+        ints.push(mk.name.len() as u64);
+        ints.extend(mk.name.bytes().map(u64::from));
+        ints.push(mk.tag.map_or(u64::MAX, |t| u64::from(t as u32)));
+        encode_elements(&mk.elements, &mut ints, &mut nodes);
+    }
+    Piece {
+        ints,
+        nodes,
+        floats,
+    }
 }
 
 /// A decoded part: the grid, its nodes' roles, the displacements of its displaced nodes
 /// and the index of each in rank 0's list.
 type Decoded = (LocalGrid, Classified, Vec<[f64; 3]>, Vec<u32>);
 
-/// The inverse of [`encode`].
-fn decode(ints: &[u64], floats: &[f64]) -> Result<Decoded> {
-    let bad = || Error::Distributed {
+/// The reader of a [`Piece`]: integers, node lists and floats in the order [`encode`] put
+/// them; every node index checked against the part's `n` nodes.
+struct Reader<'a> {
+    ints: std::slice::Iter<'a, u64>,
+    nodes: &'a [u32],
+    floats: std::slice::Iter<'a, f64>,
+    n: usize,
+}
+
+/// The error of a piece that does not read as [`encode`] wrote it.
+fn malformed() -> Error {
+    Error::Distributed {
         rank: -1,
         reason: "malformed part received from rank 0".into(),
-    };
-    let mut i = ints.iter().copied();
-    let mut f = floats.iter().copied();
-    let mut next = || i.next().ok_or_else(bad);
-    let n = next()? as usize;
-    let n_owned = next()? as usize;
-    let dim = next()? as u8;
-    let mut m = Mesh::new(dim);
-    m.coords = (0..n)
-        .map(|_| [f.next(), f.next(), f.next()])
-        .map(|p| Some([p[0]?, p[1]?, p[2]?]))
-        .collect::<Option<_>>()
-        .ok_or_else(bad)?;
-    let global_ids = (0..n).map(|_| next()).collect::<Result<Vec<u64>>>()?;
-    let groups = next()?;
-    for _ in 0..groups {
-        let kind = ElementKind::from_vtk_code(next()? as i64).ok_or_else(bad)?;
-        let len = next()? as usize;
-        let nodes = (0..len)
-            .map(|_| next().map(|v| v as u32))
-            .collect::<Result<Vec<u32>>>()?;
-        for e in nodes.chunks_exact(kind.n_nodes()) {
-            m.cells.push(kind, e, None);
-        }
     }
+}
+
+impl<'a> Reader<'a> {
+    fn int(&mut self) -> Result<u64> {
+        self.ints.next().copied().ok_or_else(malformed)
+    }
+
+    fn float(&mut self) -> Result<f64> {
+        self.floats.next().copied().ok_or_else(malformed)
+    }
+
+    fn floats<const K: usize>(&mut self) -> Result<[f64; K]> {
+        let mut v = [0.0; K];
+        for x in &mut v {
+            *x = self.float()?;
+        }
+        Ok(v)
+    }
+
+    /// The next `len` node indices.
+    fn nodes(&mut self, len: usize) -> Result<&'a [u32]> {
+        if len > self.nodes.len() {
+            return Err(malformed());
+        }
+        let (e, rest) = self.nodes.split_at(len);
+        self.nodes = rest;
+        if e.iter().any(|&v| v as usize >= self.n) {
+            return Err(malformed());
+        }
+        Ok(e)
+    }
+
+    /// Element groups written by [`encode_elements`].
+    fn elements(&mut self) -> Result<mesh::Elements> {
+        let mut el = mesh::Elements::new();
+        for _ in 0..self.int()? {
+            let kind = ElementKind::from_vtk_code(self.int()? as i64).ok_or_else(malformed)?;
+            let len = self.int()? as usize;
+            if !len.is_multiple_of(kind.n_nodes()) {
+                return Err(malformed());
+            }
+            let nodes = self.nodes(len)?;
+            el.group_mut(kind).nodes.extend_from_slice(nodes);
+        }
+        el.prune();
+        Ok(el)
+    }
+}
+
+/// The inverse of [`encode`].
+fn decode(piece: &Piece) -> Result<Decoded> {
+    let mut r = Reader {
+        ints: piece.ints.iter(),
+        nodes: &piece.nodes,
+        floats: piece.floats.iter(),
+        n: 0,
+    };
+    let n = r.int()? as usize;
+    r.n = n;
+    let n_owned = r.int()? as usize;
+    let dim = r.int()? as u8;
+    let mut m = Mesh::new(dim);
+    m.coords = (0..n).map(|_| r.floats::<3>()).collect::<Result<_>>()?;
+    let global_ids = (0..n).map(|_| r.int()).collect::<Result<Vec<u64>>>()?;
+    m.cells = r.elements()?;
     let mut roles = Vec::with_capacity(n);
     let (mut disp, mut disp_src) = (Vec::new(), Vec::new());
     for _ in 0..n {
-        let (tag, index) = (next()?, next()? as usize);
-        let pay = [f.next(), f.next(), f.next()];
-        let pay = [
-            pay[0].ok_or_else(bad)?,
-            pay[1].ok_or_else(bad)?,
-            pay[2].ok_or_else(bad)?,
-        ];
+        let (tag, index) = (r.int()?, r.int()? as usize);
+        let pay = r.floats::<3>()?;
         roles.push(match tag {
             FREE => NodeRole::Free,
             FIXED => NodeRole::Fixed,
             RIGID => NodeRole::Rigid(index),
             DISPLACED => {
                 disp.push(pay);
-                disp_src.push(u32::try_from(index).map_err(|_| bad())?);
+                disp_src.push(u32::try_from(index).map_err(|_| malformed())?);
                 NodeRole::Displaced(disp.len() - 1)
             }
             PLANE => NodeRole::Sliding(Constraint::Plane(pay)),
             LINE => NodeRole::Sliding(Constraint::Line(pay)),
-            _ => return Err(bad()),
+            _ => return Err(malformed()),
         });
     }
-    let nm = next()?;
-    let mut motions = Vec::new();
-    for _ in 0..nm {
-        let v: Vec<f64> = (0..10)
-            .map(|_| f.next())
-            .collect::<Option<_>>()
-            .ok_or_else(bad)?;
-        motions.push(RigidMotion {
-            angle_deg: v[0],
-            axis_point: [v[1], v[2], v[3]],
-            axis_dir: [v[4], v[5], v[6]],
-            translation: [v[7], v[8], v[9]],
+    let motions = (0..r.int()?)
+        .map(|_| {
+            let v = r.floats::<10>()?;
+            Ok(RigidMotion {
+                angle_deg: v[0],
+                axis_point: [v[1], v[2], v[3]],
+                axis_dir: [v[4], v[5], v[6]],
+                translation: [v[7], v[8], v[9]],
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let skin = (0..r.int()?)
+        .map(|_| {
+            let len = r.int()? as usize;
+            Ok(r.nodes(len)?.to_vec())
+        })
+        .collect::<Result<Vec<_>>>()?;
+    for _ in 0..r.int()? {
+        let len = r.int()? as usize;
+        let name = (0..len)
+            .map(|_| u8::try_from(r.int()?).map_err(|_| malformed()))
+            .collect::<Result<Vec<u8>>>()?;
+        let name = String::from_utf8(name).map_err(|_| malformed())?;
+        let tag = match r.int()? {
+            u64::MAX => None,
+            t => Some(u32::try_from(t).map_err(|_| malformed())? as i32),
+        };
+        let elements = r.elements()?;
+        m.markers.push(mesh::Marker {
+            name,
+            tag,
+            elements,
         });
-    }
-    let ns = next()?;
-    let mut skin = Vec::new();
-    for _ in 0..ns {
-        let len = next()? as usize;
-        skin.push(
-            (0..len)
-                .map(|_| next().map(|v| v as u32))
-                .collect::<Result<Vec<u32>>>()?,
-        );
     }
     let grid = LocalGrid {
         mesh: m,
@@ -614,4 +703,117 @@ pub(crate) fn gather(comm: &Comm, gids: &[u64], coords: &[[f64; 3]]) -> Option<V
         out[g as usize] = [all_x[3 * k], all_x[3 * k + 1], all_x[3 * k + 2]];
     }
     Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A box grid cut in two by bisection, its nodes classified with one rigid marker,
+    /// one displaced node and one fixed marker.
+    fn parts_of_a_box() -> (Mesh, Vec<LocalGrid>, Classified, BoundaryConditions) {
+        let m = mesh::generate::box_tets(4, 3, 3, [0.0; 3], [2.0, 1.0, 1.0]);
+        let bc = BoundaryConditions {
+            markers: vec![
+                (
+                    "x_m".into(),
+                    MarkerRole::Rigid(RigidMotion {
+                        angle_deg: 2.0,
+                        axis_point: [0.0; 3],
+                        axis_dir: [0.0, 1.0, 0.0],
+                        translation: [0.0; 3],
+                    }),
+                ),
+                ("x_p".into(), MarkerRole::Fixed),
+            ],
+            displacements: vec![(7, [0.0, 0.0, 0.01])],
+        };
+        let cls = classify(&m, &bc, 1e-6, None).unwrap();
+        let part = super::super::rcb::rcb(&m.coords, 2);
+        let grids = super::super::rcb::parts(&m, &part, 2);
+        (m, grids, cls, bc)
+    }
+
+    #[test]
+    fn a_part_reads_back_as_it_was_sent_markers_and_skin_included() {
+        let (m, grids, cls, bc) = parts_of_a_box();
+        let mut faces = vec![0usize; m.markers.len()];
+        let (mut displaced, mut rigid) = (0, 0);
+        for g in &grids {
+            let (back, roles, disp, src) = decode(&encode(g, &cls, &bc)).unwrap();
+            assert_eq!(back.global_ids, g.global_ids);
+            assert_eq!(back.n_owned, g.n_owned);
+            assert_eq!(back.mesh.coords, g.mesh.coords);
+            assert_eq!(back.mesh.cells, g.mesh.cells);
+            assert_eq!(back.mesh.markers, g.mesh.markers);
+            for (k, mk) in back.mesh.markers.iter().enumerate() {
+                assert_eq!(mk.name, m.markers[k].name);
+                // A marker's element on this part has its nodes on this part.
+                faces[k] += mk.elements.len();
+            }
+            for (i, &gid) in g.global_ids.iter().enumerate() {
+                let want = cls.roles[gid as usize];
+                match (roles.roles[i], want) {
+                    (NodeRole::Displaced(k), NodeRole::Displaced(j)) => {
+                        assert_eq!((disp[k], src[k] as usize), (bc.displacements[j].1, j));
+                        displaced += 1;
+                    }
+                    (NodeRole::Rigid(a), NodeRole::Rigid(b)) => {
+                        assert_eq!(a, b);
+                        rigid += 1;
+                    }
+                    (got, want) => assert_eq!(format!("{got:?}"), format!("{want:?}")),
+                }
+            }
+            assert_eq!(roles.motions.len(), cls.motions.len());
+            for e in &roles.skin {
+                assert!(e.iter().all(|&v| (v as usize) < back.mesh.n_nodes()));
+            }
+        }
+        assert!(
+            displaced >= 1 && rigid >= 16,
+            "{displaced} displaced, {rigid} rigid"
+        );
+        // Every boundary element is on some part.
+        for (k, mk) in m.markers.iter().enumerate() {
+            assert!(faces[k] >= mk.elements.len(), "marker {}", mk.name);
+        }
+    }
+
+    #[test]
+    fn a_malformed_part_is_an_error_not_a_panic() {
+        let (_, grids, cls, bc) = parts_of_a_box();
+        let good = encode(&grids[0], &cls, &bc);
+        let n = grids[0].mesh.n_nodes() as u32;
+        let mut wrong = Vec::new();
+        // A node index beyond the part's nodes, in a cell and in the last marker element.
+        let mut p = encode(&grids[0], &cls, &bc);
+        p.nodes[0] = n;
+        wrong.push(p);
+        let mut p = encode(&grids[0], &cls, &bc);
+        *p.nodes.last_mut().unwrap() = n + 5;
+        wrong.push(p);
+        // Lists cut short.
+        for cut in [1, good.ints.len() / 2, good.ints.len() - 1] {
+            let mut p = encode(&grids[0], &cls, &bc);
+            p.ints.truncate(cut);
+            wrong.push(p);
+        }
+        let mut p = encode(&grids[0], &cls, &bc);
+        p.nodes.truncate(p.nodes.len() - 1);
+        wrong.push(p);
+        let mut p = encode(&grids[0], &cls, &bc);
+        p.floats.truncate(p.floats.len() / 2);
+        wrong.push(p);
+        for (k, p) in wrong.iter().enumerate() {
+            let err = decode(p)
+                .err()
+                .unwrap_or_else(|| panic!("case {k} decoded"));
+            assert!(
+                err.to_string().contains("malformed part"),
+                "case {k}: {err}"
+            );
+        }
+        assert!(decode(&good).is_ok());
+    }
 }
