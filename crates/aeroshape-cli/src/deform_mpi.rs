@@ -289,11 +289,12 @@ fn summary(
     output: &std::path::Path,
 ) -> anyhow::Result<()> {
     outln!(
-        "{} nodes, {cells} cells on {} ranks ({}, {} ghost nodes); {} iterations ({} for R) in {} increment(s), residual {:.1e}",
+        "{} nodes, {cells} cells on {} ranks ({}, {} ghost nodes, unknowns {:.3} of the mean on the busiest); {} iterations ({} for R) in {} increment(s), residual {:.1e}",
         r.nodes,
         r.ranks,
         r.partitioner,
         r.ghost_nodes,
+        r.imbalance,
         r.iterations,
         r.rotation_iterations,
         r.increments,

@@ -489,10 +489,13 @@ impl<'c> Deformer<'c> {
         let (comm, opts, part) = (self.comm, &self.opts, &self.local.part);
         self.runs.set(self.runs.get() + 1);
         let x0 = &part.grid.mesh.coords;
+        let unknowns = sum_u64(comm, self.sys.node_of.len() as u64);
+        let busiest = max(comm, self.sys.node_of.len() as f64);
         let mut rep = DistReport {
             ranks: comm.size() as usize,
             nodes: part.n_global,
-            unknowns: sum_u64(comm, self.sys.node_of.len() as u64),
+            unknowns,
+            imbalance: busiest * f64::from(comm.size()) / (unknowns.max(1) as f64),
             ghost_nodes: sum_u64(comm, (x0.len() - part.grid.n_owned) as u64),
             partitioner: self.local.made_by.to_string(),
             partition_threads: self.partition_threads,

@@ -13,7 +13,7 @@ use mesh::{Adjacency, Mesh};
 use rayon::prelude::*;
 use sparse::order;
 
-use super::rcb::rcb;
+use super::rcb::rcb_weighted;
 
 /// How rank 0 cuts the whole grid into one part per rank ([`cut`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -56,6 +56,29 @@ impl std::str::FromStr for Partitioner {
     }
 }
 
+/// The weight of a node that is an unknown of the solves against one whose position is
+/// known (moving with a rigid marker, displaced, fixed). Per rank, at 1M nodes on 2 ranks,
+/// about 1 s of the work goes with the nodes and cells (each rank's own part, the quality)
+/// and about 5 s with the unknowns (the multigrids' set-ups, the coarse space, the R field
+/// and Eq. 21): with 92 % of the nodes unknown, an unknown weighs about 6 known nodes. A
+/// partition balancing node counts leaves the unknowns uneven where a part holds much of a
+/// wall: 16 % above the mean on the busiest of 8 ranks at 98k nodes with METIS, 3.6 % on 2
+/// ranks at 1M (docs/perf-log/2026-12-04-mpi-balance.md).
+pub(crate) const UNKNOWN_WEIGHT: u32 = 6;
+
+/// The weight of every node for the cut: [`UNKNOWN_WEIGHT`] for the nodes the solves
+/// move (free or sliding), 1 for the others.
+pub(crate) fn work_weights(roles: &[crate::bc::NodeRole]) -> Vec<u32> {
+    use crate::bc::NodeRole;
+    roles
+        .iter()
+        .map(|r| match r {
+            NodeRole::Free | NodeRole::Sliding(_) | NodeRole::OnSupport(_) => UNKNOWN_WEIGHT,
+            _ => 1,
+        })
+        .collect()
+}
+
 /// A partition of the nodes of a grid ([`cut`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Cut {
@@ -70,19 +93,26 @@ pub struct Cut {
 /// The nodes of `mesh` cut into `parts` parts by `by`; METIS falls back on coordinate
 /// bisection, with the reason in [`Cut::fallback`].
 pub fn cut(mesh: &Mesh, parts: usize, by: Partitioner) -> Cut {
-    cut_in(mesh, parts, by, &order::morton_order(&mesh.coords))
+    cut_in(mesh, parts, by, &order::morton_order(&mesh.coords), &[])
 }
 
-/// [`cut`], METIS working on the grid renumbered by `perm` ([`metis_in`]).
-pub(crate) fn cut_in(mesh: &Mesh, parts: usize, by: Partitioner, perm: &[u32]) -> Cut {
+/// [`cut`] balancing the nodes' `weight` (empty: every node 1; see [`work_weights`]),
+/// METIS working on the grid renumbered by `perm` ([`metis_in`]).
+pub(crate) fn cut_in(
+    mesh: &Mesh,
+    parts: usize,
+    by: Partitioner,
+    perm: &[u32],
+    weight: &[u32],
+) -> Cut {
     let bisect = |fallback| Cut {
-        part: rcb(&mesh.coords, parts),
+        part: rcb_weighted(&mesh.coords, parts, weight),
         by: Partitioner::Rcb,
         fallback,
     };
     match by {
         Partitioner::Rcb => bisect(None),
-        Partitioner::Metis => match metis_in(mesh, parts, perm) {
+        Partitioner::Metis => match metis_in(mesh, parts, perm, weight) {
             Ok(part) => Cut {
                 part,
                 by: Partitioner::Metis,
@@ -97,16 +127,19 @@ pub(crate) fn cut_in(mesh: &Mesh, parts: usize, by: Partitioner, perm: &[u32]) -
 /// (every part holding nodes); an error when METIS cannot take the graph or fails, or leaves
 /// a part without nodes.
 pub fn metis(mesh: &Mesh, parts: usize) -> std::result::Result<Vec<u32>, String> {
-    metis_in(mesh, parts, &order::morton_order(&mesh.coords))
+    metis_in(mesh, parts, &order::morton_order(&mesh.coords), &[])
 }
 
 /// [`metis`] on the node graph of `mesh` renumbered by `perm` (`perm[old] = new`; a Morton
 /// order: the graph is then built from nearby memory, where a Gmsh grid's own order reads
 /// every node's neighbours from all over the grid); the parts in the numbering of `mesh`.
+/// With `weight` (one per node of `mesh`), the parts balance the weights instead of the
+/// node counts.
 pub(crate) fn metis_in(
     mesh: &Mesh,
     parts: usize,
     perm: &[u32],
+    weight: &[u32],
 ) -> std::result::Result<Vec<u32>, String> {
     let n = mesh.n_nodes();
     if parts <= 1 {
@@ -177,8 +210,20 @@ pub(crate) fn metis_in(
     let _alone = ONE_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    metis::Graph::new(1, nparts, &xadj, &adjncy)
-        .map_err(|e| format!("METIS refused the node graph: {e}"))?
+    let mut vwgt: Vec<metis::Idx> = Vec::new();
+    if !weight.is_empty() {
+        vwgt = vec![0; n];
+        for (old, &new) in perm.iter().enumerate() {
+            vwgt[new as usize] = metis::Idx::try_from(weight[old])
+                .map_err(|_| format!("node weight {} beyond METIS's indices", weight[old]))?;
+        }
+    }
+    let mut graph = metis::Graph::new(1, nparts, &xadj, &adjncy)
+        .map_err(|e| format!("METIS refused the node graph: {e}"))?;
+    if !vwgt.is_empty() {
+        graph = graph.set_vwgt(&vwgt);
+    }
+    graph
         .part_kway(&mut part)
         .map_err(|e| format!("METIS failed: {e}"))?;
     let mut count = vec![0usize; parts];
@@ -197,6 +242,7 @@ pub(crate) fn metis_in(
 
 #[cfg(test)]
 mod tests {
+    use super::super::rcb::rcb;
     use super::*;
 
     /// Edges of `mesh` whose two nodes are in different parts.
@@ -229,6 +275,46 @@ mod tests {
             );
             // The same partition again (METIS's seed is fixed).
             assert_eq!(metis(&m, parts).unwrap(), p);
+        }
+    }
+
+    #[test]
+    fn metis_balances_the_weights_of_the_nodes() {
+        let m = mesh::generate::box_tets(12, 6, 4, [0.0; 3], [2.0, 1.0, 1.0]);
+        let roles: Vec<crate::bc::NodeRole> = m
+            .coords
+            .iter()
+            .map(|p| {
+                if p[0] < 0.5 {
+                    crate::bc::NodeRole::Fixed
+                } else {
+                    crate::bc::NodeRole::Free
+                }
+            })
+            .collect();
+        let weight = work_weights(&roles);
+        let total: u64 = weight.iter().map(|&w| u64::from(w)).sum();
+        let perm = order::morton_order(&m.coords);
+        for parts in [2, 4] {
+            let p = metis_in(&m, parts, &perm, &weight).unwrap();
+            let (mut w, mut n) = (vec![0u64; parts], vec![0usize; parts]);
+            for (&q, &wi) in p.iter().zip(&weight) {
+                w[q as usize] += u64::from(wi);
+                n[q as usize] += 1;
+            }
+            let ideal = total as f64 / parts as f64;
+            let hi = *w.iter().max().unwrap() as f64;
+            assert!(
+                hi <= 1.03 * ideal + f64::from(UNKNOWN_WEIGHT),
+                "{parts} parts: {w:?}"
+            );
+            // The fixed nodes weigh less: their parts hold more nodes.
+            let unweighted = metis_in(&m, parts, &perm, &[]).unwrap();
+            assert_ne!(p, unweighted, "{parts} parts");
+            assert!(
+                n.iter().max().unwrap() - n.iter().min().unwrap() > m.n_nodes() / 20,
+                "{parts} parts: {n:?}"
+            );
         }
     }
 

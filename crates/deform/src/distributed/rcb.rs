@@ -16,13 +16,28 @@ use super::partition::LocalGrid;
 /// longest side of their bounding box, in proportion to the number of parts on each side
 /// (any number of parts; ties broken by node index, so the result is deterministic).
 pub fn rcb(coords: &[[f64; 3]], parts: usize) -> Vec<u32> {
+    rcb_weighted(coords, parts, &[])
+}
+
+/// [`rcb`] with a weight per node (`weight[i]`; empty: every node 1): each split is at the
+/// weighted median, so that every part holds the same share of the total weight, to within
+/// the largest weight of one node.
+pub fn rcb_weighted(coords: &[[f64; 3]], parts: usize, weight: &[u32]) -> Vec<u32> {
     let mut part = vec![0u32; coords.len()];
     let mut idx: Vec<u32> = (0..coords.len() as u32).collect();
-    split(coords, &mut idx, 0, parts.max(1), &mut part);
+    let w = |i: u32| weight.get(i as usize).map_or(1, |&w| u64::from(w));
+    split(coords, &mut idx, 0, parts.max(1), &mut part, &w);
     part
 }
 
-fn split(x: &[[f64; 3]], idx: &mut [u32], first: u32, parts: usize, part: &mut [u32]) {
+fn split(
+    x: &[[f64; 3]],
+    idx: &mut [u32],
+    first: u32,
+    parts: usize,
+    part: &mut [u32],
+    w: &impl Fn(u32) -> u64,
+) {
     if parts <= 1 || idx.len() <= 1 {
         for &i in idx.iter() {
             part[i as usize] = first;
@@ -41,15 +56,33 @@ fn split(x: &[[f64; 3]], idx: &mut [u32], first: u32, parts: usize, part: &mut [
         .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
         .unwrap_or(0);
     let left = parts / 2;
-    let cut = idx.len() * left / parts;
-    idx.select_nth_unstable_by(cut, |&a, &b| {
+    let along = |&a: &u32, &b: &u32| {
         x[a as usize][axis]
             .total_cmp(&x[b as usize][axis])
             .then(a.cmp(&b))
-    });
+    };
+    let total: u64 = idx.iter().map(|&i| w(i)).sum();
+    let cut = if total == idx.len() as u64 {
+        // Unit weights: the median, in linear time.
+        let cut = idx.len() * left / parts;
+        idx.select_nth_unstable_by(cut, along);
+        cut
+    } else {
+        // The weighted median: the first node along the axis where the weight before it
+        // reaches the left parts' share.
+        idx.par_sort_unstable_by(along);
+        let share = (u128::from(total) * left as u128 / parts as u128) as u64;
+        let mut before = 0u64;
+        idx.iter()
+            .position(|&i| {
+                before += w(i);
+                before > share
+            })
+            .unwrap_or(idx.len())
+    };
     let (a, b) = idx.split_at_mut(cut);
-    split(x, a, first, left, part);
-    split(x, b, first + left as u32, parts - left, part);
+    split(x, a, first, left, part, w);
+    split(x, b, first + left as u32, parts - left, part, w);
 }
 
 /// The parts of `mesh` for the node partition `part` (`parts` parts): for each, its owned
@@ -212,6 +245,43 @@ mod tests {
             let cells: usize = m.tets().len();
             let on_parts: usize = grids.iter().map(|g| g.mesh.tets().len()).sum();
             assert!(on_parts >= cells);
+        }
+    }
+
+    /// The total weight of each part.
+    fn part_weights(part: &[u32], weight: &[u32], parts: usize) -> Vec<u64> {
+        let mut w = vec![0u64; parts];
+        for (&q, &wi) in part.iter().zip(weight) {
+            w[q as usize] += u64::from(wi);
+        }
+        w
+    }
+
+    #[test]
+    fn weighted_bisection_balances_the_weights_not_the_nodes() {
+        let m = mesh::generate::box_tets(12, 6, 4, [0.0; 3], [2.0, 1.0, 1.0]);
+        // The nodes of the left quarter weigh 6, the others 1.
+        let weight: Vec<u32> = m
+            .coords
+            .iter()
+            .map(|p| if p[0] < 0.5 { 6 } else { 1 })
+            .collect();
+        for parts in [2, 3, 5] {
+            let p = rcb_weighted(&m.coords, parts, &weight);
+            let w = part_weights(&p, &weight, parts);
+            let (lo, hi) = (*w.iter().min().unwrap(), *w.iter().max().unwrap());
+            // Each split is off its share by less than one node's weight, at each level.
+            assert!(hi - lo <= 6 * 3, "{parts} parts: weights {w:?}");
+            let n = part_weights(&p, &vec![1; weight.len()], parts);
+            assert!(
+                n.iter().max() > n.iter().min(),
+                "{parts} parts: nodes {n:?}"
+            );
+            // Unit weights cut as the unweighted bisection.
+            assert_eq!(
+                rcb_weighted(&m.coords, parts, &vec![1; weight.len()]),
+                rcb(&m.coords, parts)
+            );
         }
     }
 

@@ -16,6 +16,9 @@ pub struct DistReport {
     pub nodes: u64,
     /// Unknowns over the ranks.
     pub unknowns: u64,
+    /// The most owned unknowns of a rank over their mean (1: even): the ranks wait for the
+    /// busiest at every product and dot.
+    pub imbalance: f64,
     /// Ghost nodes over the ranks (the partition surface, counted on the receiving side).
     pub ghost_nodes: u64,
     /// How the parts were made: `given` (by the caller), `metis`, `rcb`, or

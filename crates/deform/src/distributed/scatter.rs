@@ -13,7 +13,7 @@ use sparse::order;
 
 use super::comm::{Comm, agree, broadcast_vec, offsets};
 use super::cores::{broadcast_idle, on_pool, root_pool};
-use super::metis::{Partitioner, cut_in};
+use super::metis::{Partitioner, cut_in, work_weights};
 use super::partition::{LocalGrid, Partition};
 use super::rcb::parts_in;
 use crate::bc::{
@@ -167,7 +167,7 @@ impl Local {
                 // The nodes along a Morton curve: METIS's graph and each part are built
                 // in that order (from nearby memory; a Gmsh grid's order is scattered).
                 let morton = order::morton_order(&m.coords);
-                let c = cut_in(m, p, by, &morton);
+                let c = cut_in(m, p, by, &morton, &work_weights(&cls.roles));
                 let grids = parts_in(m, &c.part, p, &order::inverse(&morton));
                 let pieces: Vec<Piece> = grids.par_iter().map(|g| encode(g, &cls, bc)).collect();
                 let how: u64 = match (c.by, c.fallback) {
