@@ -68,17 +68,36 @@ fn split(
         idx.select_nth_unstable_by(cut, along);
         cut
     } else {
-        // The weighted median: the first node along the axis where the weight before it
-        // reaches the left parts' share.
-        idx.par_sort_unstable_by(along);
+        // The weighted median: the first node along the axis whose weight, with the nodes
+        // before it, passes the left parts' share. Found by halving the range it lies in,
+        // each half put on its side by a linear-time selection; idx[lo..hi] holds the nodes
+        // of ranks lo..hi along the axis, the lo first weigh `before` ≤ share, the hi first
+        // more than share (share < total: left < parts).
         let share = (u128::from(total) * left as u128 / parts as u128) as u64;
-        let mut before = 0u64;
-        idx.iter()
-            .position(|&i| {
-                before += w(i);
-                before > share
-            })
-            .unwrap_or(idx.len())
+        let (mut lo, mut hi, mut before) = (0usize, idx.len(), 0u64);
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            idx[lo..hi].select_nth_unstable_by(mid - lo, along);
+            let w_left = before + idx[lo..mid].iter().map(|&i| w(i)).sum::<u64>();
+            if w_left > share {
+                hi = mid;
+            } else {
+                (lo, before) = (mid, w_left);
+            }
+        }
+        // hi = lo + 1: the node of rank lo is the first to pass the share. A node heavier
+        // than a part's share would leave a part without nodes: each side keeps at least
+        // one node per part.
+        let cut = lo.clamp(
+            left.min(idx.len()),
+            idx.len()
+                .saturating_sub(parts - left)
+                .max(left.min(idx.len())),
+        );
+        if cut != lo && cut < idx.len() {
+            idx.select_nth_unstable_by(cut, along);
+        }
+        cut
     };
     let (a, b) = idx.split_at_mut(cut);
     split(x, a, first, left, part, w);
@@ -277,12 +296,46 @@ mod tests {
                 n.iter().max() > n.iter().min(),
                 "{parts} parts: nodes {n:?}"
             );
-            // Unit weights cut as the unweighted bisection.
-            assert_eq!(
-                rcb_weighted(&m.coords, parts, &vec![1; weight.len()]),
-                rcb(&m.coords, parts)
-            );
+            // Equal weights cut as the unweighted bisection (unit weights take its
+            // selection, weights of 2 the weighted search, with ties at the share).
+            for w in [1, 2] {
+                assert_eq!(
+                    rcb_weighted(&m.coords, parts, &vec![w; weight.len()]),
+                    rcb(&m.coords, parts),
+                    "{parts} parts, weights {w}"
+                );
+            }
+            // The cut of the sorted order: the first node whose weight with those before
+            // it passes the share (two parts: one split along x, the longest side).
+            if parts == 2 {
+                let mut idx: Vec<u32> = (0..m.n_nodes() as u32).collect();
+                idx.sort_by(|&a, &b| {
+                    m.coords[a as usize][0]
+                        .total_cmp(&m.coords[b as usize][0])
+                        .then(a.cmp(&b))
+                });
+                let total: u64 = weight.iter().map(|&w| u64::from(w)).sum();
+                let mut before = 0;
+                let cut = idx
+                    .iter()
+                    .position(|&i| {
+                        before += u64::from(weight[i as usize]);
+                        before > total / 2
+                    })
+                    .unwrap();
+                for (k, &i) in idx.iter().enumerate() {
+                    assert_eq!(p[i as usize], u32::from(k >= cut), "node {i}");
+                }
+            }
         }
+    }
+
+    #[test]
+    fn a_heavy_node_does_not_empty_a_part() {
+        let x = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
+        assert_eq!(rcb_weighted(&x[..2], 2, &[6, 1]), vec![0, 1]);
+        assert_eq!(rcb_weighted(&x, 3, &[1, 1, 60]), vec![0, 1, 2]);
+        assert_eq!(rcb_weighted(&x, 2, &[60, 1, 1]), vec![0, 1, 1]);
     }
 
     /// The cells of a grid as sorted lists of global nodes.
