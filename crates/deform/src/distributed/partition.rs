@@ -71,7 +71,27 @@ impl Partition {
         Ok((p, perm.unwrap_or_default()))
     }
 
-    fn build(comm: &Comm, mut grid: LocalGrid, reorder: bool) -> Result<(Self, Option<Vec<u32>>)> {
+    /// A part made on rank 0 from the whole grid (`super::scatter`), with the owner of each
+    /// of its ghosts (`ghost_owner`, in the order of its ghosts) as rank 0 cut them: it is
+    /// consistent by construction, so the checks of a given part and the owners' directory
+    /// are skipped (0.11 s of each rank's 0.75 s at 1M nodes on 2 ranks). Renumbered as
+    /// [`Partition::ordered`] does. Collective.
+    pub(crate) fn made(
+        comm: &Comm,
+        grid: LocalGrid,
+        ghost_owner: &[i32],
+    ) -> Result<(Self, Vec<u32>)> {
+        let n_owned = grid.n_owned;
+        let n_global = sum_u64(comm, n_owned as u64);
+        let mut owner = vec![comm.rank(); grid.mesh.n_nodes()];
+        owner[n_owned..].copy_from_slice(ghost_owner);
+        let adj = Adjacency::try_build(&grid.mesh).map_err(|e| fail(comm, e.to_string()));
+        let adj = agree(comm, adj)?;
+        let (p, perm) = Self::finish(comm, grid, owner, n_global, adj, true)?;
+        Ok((p, perm.unwrap_or_default()))
+    }
+
+    fn build(comm: &Comm, grid: LocalGrid, reorder: bool) -> Result<(Self, Option<Vec<u32>>)> {
         let n = grid.mesh.n_nodes();
         let me = comm.rank();
         let p = comm.size() as usize;
@@ -206,7 +226,20 @@ impl Partition {
         }
         agree(comm, missing)?;
         drop(local_of);
-        let mut adj = adj;
+        Self::finish(comm, grid, owner, n_global, adj, reorder)
+    }
+
+    /// The part's renumbering in locality order (with `reorder`) and its node halo, once
+    /// its owners and adjacency are known. Collective.
+    fn finish(
+        comm: &Comm,
+        mut grid: LocalGrid,
+        mut owner: Vec<i32>,
+        n_global: u64,
+        mut adj: Adjacency,
+        reorder: bool,
+    ) -> Result<(Self, Option<Vec<u32>>)> {
+        let n = grid.mesh.n_nodes();
         let perm = reorder.then(|| {
             let owned: Vec<u32> = (0..grid.n_owned as u32).collect();
             let order = locality_order(&owned, &adj, &grid.mesh.coords);

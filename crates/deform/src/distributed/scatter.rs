@@ -11,7 +11,7 @@ use mpi::traits::*;
 use rayon::prelude::*;
 use sparse::order;
 
-use super::comm::{Comm, agree, broadcast_vec, offsets};
+use super::comm::{Comm, agree, offsets};
 use super::cores::{broadcast_idle, on_pool, root_pool};
 use super::metis::{Partitioner, cut_in, work_weights};
 use super::partition::{LocalGrid, Partition};
@@ -169,7 +169,12 @@ impl Local {
                 let morton = order::morton_order(&m.coords);
                 let c = cut_in(m, p, by, &morton, &work_weights(&cls.roles));
                 let grids = parts_in(m, &c.part, p, &order::inverse(&morton));
-                let pieces: Vec<Piece> = grids.par_iter().map(|g| encode(g, &cls, bc)).collect();
+                let of = Origin {
+                    part: &c.part,
+                    boundary: &root_boundary,
+                };
+                let pieces: Vec<Piece> =
+                    grids.par_iter().map(|g| encode(g, &cls, bc, &of)).collect();
                 let how: u64 = match (c.by, c.fallback) {
                     (Partitioner::Metis, _) => 1,
                     (Partitioner::Rcb, None) => 2,
@@ -201,13 +206,23 @@ impl Local {
             reason: "no part received".into(),
         })?;
         let t = std::time::Instant::now();
-        let (grid, mut cls, disp, disp_src) = agree(comm, decode(&piece))?;
+        let got = agree(comm, decode(&piece, comm.size(), comm.rank()))?;
         drop(piece);
+        let Decoded {
+            grid,
+            mut cls,
+            disp,
+            disp_src,
+            ghost_owner,
+            boundary: flags,
+        } = got;
         // The part's numbering is ours: its owned nodes take the serial solver's order.
-        let (part, perm) = Partition::ordered(comm, grid)?;
+        let (part, perm) = Partition::made(comm, grid, &ghost_owner)?;
         let mut roles = cls.roles.clone();
+        let mut boundary = vec![false; flags.len()];
         for (i, &p) in perm.iter().enumerate() {
             roles[p as usize] = cls.roles[i];
+            boundary[p as usize] = flags[i];
         }
         cls.roles = roles;
         for e in &mut cls.skin {
@@ -215,7 +230,6 @@ impl Local {
                 *v = perm[*v as usize];
             }
         }
-        let boundary = root_flags(comm, &part, &root_boundary);
         Ok(Self {
             part,
             cls,
@@ -341,33 +355,6 @@ fn displaced_skin(mesh: &Mesh, bc: &BoundaryConditions, before: &[NodeRole], cls
     push_displaced_skin(mesh, rigid, &cls.roles, new, &mut cls.skin);
 }
 
-/// Rank 0's whole-grid `root` flags (read on rank 0 only) on the local nodes of `part`:
-/// broadcast as the global ids of the flagged nodes (collective).
-fn root_flags(comm: &Comm, part: &Partition, root: &[bool]) -> Vec<bool> {
-    let ids: Vec<u64> = if comm.rank() == 0 {
-        (0..root.len() as u64)
-            .filter(|&g| root[g as usize])
-            .collect()
-    } else {
-        Vec::new()
-    };
-    let ids = broadcast_vec(comm, 0, ids);
-    let g = &part.grid;
-    let local: std::collections::HashMap<u64, usize> = g
-        .global_ids
-        .iter()
-        .enumerate()
-        .map(|(i, &gid)| (gid, i))
-        .collect();
-    let mut flags = vec![false; g.mesh.n_nodes()];
-    for gid in ids {
-        if let Some(&i) = local.get(&gid) {
-            flags[i] = true;
-        }
-    }
-    flags
-}
-
 /// The local nodes' `flags` with the ghosts' replaced by their owners' (collective).
 fn owners_flags(comm: &Comm, part: &Partition, flags: Vec<bool>) -> Vec<bool> {
     let mut v: Vec<[f64; 1]> = flags.iter().map(|&f| [f64::from(u8::from(f))]).collect();
@@ -443,10 +430,18 @@ fn encode_elements(el: &mesh::Elements, ints: &mut Vec<u64>, nodes: &mut Vec<u32
     }
 }
 
+/// What rank 0 knows of the whole grid's nodes beside their roles: the part of each
+/// (the owner of a ghost) and the moving boundary's flags.
+struct Origin<'a> {
+    part: &'a [u32],
+    boundary: &'a [bool],
+}
+
 /// A part and its nodes' roles as a piece (what rank 0 sends): the cells, the markers'
-/// elements whose nodes are all in the part (for a grid written in pieces) and the skin
-/// elements whose nodes are all local, in local numbering.
-fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> Piece {
+/// elements whose nodes are all in the part (for a grid written in pieces), the skin
+/// elements whose nodes are all local, in local numbering, the owners of its ghosts and
+/// its nodes on the moving boundary.
+fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions, of: &Origin) -> Piece {
     let n = g.mesh.n_nodes();
     let mut ints = Vec::with_capacity(3 * n + 64);
     let mut nodes = Vec::with_capacity(g.mesh.cells.groups().iter().map(|c| c.nodes.len()).sum());
@@ -503,6 +498,18 @@ fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> Piece {
         ints.push(mk.tag.map_or(u64::MAX, |t| u64::from(t as u32)));
         encode_elements(&mk.elements, &mut ints, &mut nodes);
     }
+    ints.extend(
+        g.global_ids[g.n_owned..]
+            .iter()
+            .map(|&gid| u64::from(of.part[gid as usize])),
+    );
+    let flagged = g.global_ids.iter().enumerate();
+    let flagged: Vec<u32> = flagged
+        .filter(|&(_, &gid)| of.boundary[gid as usize])
+        .map(|(i, _)| i as u32)
+        .collect();
+    ints.push(flagged.len() as u64);
+    nodes.extend(flagged);
     Piece {
         ints,
         nodes,
@@ -510,9 +517,20 @@ fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions) -> Piece {
     }
 }
 
-/// A decoded part: the grid, its nodes' roles, the displacements of its displaced nodes
-/// and the index of each in rank 0's list.
-type Decoded = (LocalGrid, Classified, Vec<[f64; 3]>, Vec<u32>);
+/// A decoded part.
+struct Decoded {
+    grid: LocalGrid,
+    /// Its nodes' roles.
+    cls: Classified,
+    /// The displacements of its displaced nodes.
+    disp: Vec<[f64; 3]>,
+    /// The index of each in rank 0's list.
+    disp_src: Vec<u32>,
+    /// The owner of each ghost.
+    ghost_owner: Vec<i32>,
+    /// The moving boundary's flag of each node.
+    boundary: Vec<bool>,
+}
 
 /// The reader of a [`Piece`]: integers, node lists and floats in the order [`encode`] put
 /// them; every node index checked against the part's `n` nodes.
@@ -578,8 +596,8 @@ impl<'a> Reader<'a> {
     }
 }
 
-/// The inverse of [`encode`].
-fn decode(piece: &Piece) -> Result<Decoded> {
+/// The inverse of [`encode`], on rank `me` of `ranks` (a ghost's owner is another rank).
+fn decode(piece: &Piece, ranks: i32, me: i32) -> Result<Decoded> {
     let mut r = Reader {
         ints: piece.ints.iter(),
         nodes: &piece.nodes,
@@ -589,6 +607,9 @@ fn decode(piece: &Piece) -> Result<Decoded> {
     let n = r.int()? as usize;
     r.n = n;
     let n_owned = r.int()? as usize;
+    if n_owned > n {
+        return Err(malformed());
+    }
     let dim = r.int()? as u8;
     let mut m = Mesh::new(dim);
     m.coords = (0..n).map(|_| r.floats::<3>()).collect::<Result<_>>()?;
@@ -647,19 +668,38 @@ fn decode(piece: &Piece) -> Result<Decoded> {
             elements,
         });
     }
-    let grid = LocalGrid {
-        mesh: m,
-        global_ids,
-        n_owned,
-    };
-    let cls = Classified {
-        roles,
-        motions,
-        planes: Vec::new(),
-        skin,
-        supports: Vec::new(),
-    };
-    Ok((grid, cls, disp, disp_src))
+    let ghost_owner = (n_owned..n)
+        .map(|_| {
+            let o = r.int()?;
+            i32::try_from(o)
+                .ok()
+                .filter(|&o| o < ranks && o != me)
+                .ok_or_else(malformed)
+        })
+        .collect::<Result<Vec<i32>>>()?;
+    let mut boundary = vec![false; n];
+    let flagged = r.int()? as usize;
+    for &i in r.nodes(flagged)? {
+        boundary[i as usize] = true;
+    }
+    Ok(Decoded {
+        grid: LocalGrid {
+            mesh: m,
+            global_ids,
+            n_owned,
+        },
+        cls: Classified {
+            roles,
+            motions,
+            planes: Vec::new(),
+            skin,
+            supports: Vec::new(),
+        },
+        disp,
+        disp_src,
+        ghost_owner,
+        boundary,
+    })
 }
 
 /// The owned nodes' coordinates `coords` of every rank, whose global ids are `gids`,
@@ -711,7 +751,15 @@ mod tests {
 
     /// A box grid cut in two by bisection, its nodes classified with one rigid marker,
     /// one displaced node and one fixed marker.
-    fn parts_of_a_box() -> (Mesh, Vec<LocalGrid>, Classified, BoundaryConditions) {
+    #[allow(clippy::type_complexity)]
+    fn parts_of_a_box() -> (
+        Mesh,
+        Vec<LocalGrid>,
+        Classified,
+        BoundaryConditions,
+        Vec<u32>,
+        Vec<bool>,
+    ) {
         let m = mesh::generate::box_tets(4, 3, 3, [0.0; 3], [2.0, 1.0, 1.0]);
         let bc = BoundaryConditions {
             markers: vec![
@@ -731,16 +779,29 @@ mod tests {
         let cls = classify(&m, &bc, 1e-6, None).unwrap();
         let part = super::super::rcb::rcb(&m.coords, 2);
         let grids = super::super::rcb::parts(&m, &part, 2);
-        (m, grids, cls, bc)
+        let boundary = crate::deformer::moving_boundary(&m, &bc, &cls);
+        (m, grids, cls, bc, part, boundary)
     }
 
     #[test]
     fn a_part_reads_back_as_it_was_sent_markers_and_skin_included() {
-        let (m, grids, cls, bc) = parts_of_a_box();
+        let (m, grids, cls, bc, part, boundary) = parts_of_a_box();
+        let of = Origin {
+            part: &part,
+            boundary: &boundary,
+        };
         let mut faces = vec![0usize; m.markers.len()];
-        let (mut displaced, mut rigid) = (0, 0);
-        for g in &grids {
-            let (back, roles, disp, src) = decode(&encode(g, &cls, &bc)).unwrap();
+        let (mut displaced, mut rigid, mut flagged) = (0, 0, 0);
+        for (q, g) in grids.iter().enumerate() {
+            let got = decode(&encode(g, &cls, &bc, &of), 2, q as i32).unwrap();
+            let (back, roles, disp, src) = (&got.grid, &got.cls, &got.disp, &got.disp_src);
+            for (k, &gid) in g.global_ids[g.n_owned..].iter().enumerate() {
+                assert_eq!(got.ghost_owner[k], part[gid as usize] as i32);
+            }
+            for (i, &gid) in g.global_ids.iter().enumerate() {
+                assert_eq!(got.boundary[i], boundary[gid as usize]);
+                flagged += usize::from(got.boundary[i]);
+            }
             assert_eq!(back.global_ids, g.global_ids);
             assert_eq!(back.n_owned, g.n_owned);
             assert_eq!(back.mesh.coords, g.mesh.coords);
@@ -774,6 +835,7 @@ mod tests {
             displaced >= 1 && rigid >= 16,
             "{displaced} displaced, {rigid} rigid"
         );
+        assert!(flagged >= 16, "{flagged} nodes on the moving boundary");
         // Every boundary element is on some part.
         for (k, mk) in m.markers.iter().enumerate() {
             assert!(faces[k] >= mk.elements.len(), "marker {}", mk.name);
@@ -782,31 +844,35 @@ mod tests {
 
     #[test]
     fn a_malformed_part_is_an_error_not_a_panic() {
-        let (_, grids, cls, bc) = parts_of_a_box();
-        let good = encode(&grids[0], &cls, &bc);
+        let (_, grids, cls, bc, part, boundary) = parts_of_a_box();
+        let of = Origin {
+            part: &part,
+            boundary: &boundary,
+        };
+        let good = encode(&grids[0], &cls, &bc, &of);
         let n = grids[0].mesh.n_nodes() as u32;
         let mut wrong = Vec::new();
         // A node index beyond the part's nodes, in a cell and in the last marker element.
-        let mut p = encode(&grids[0], &cls, &bc);
+        let mut p = encode(&grids[0], &cls, &bc, &of);
         p.nodes[0] = n;
         wrong.push(p);
-        let mut p = encode(&grids[0], &cls, &bc);
+        let mut p = encode(&grids[0], &cls, &bc, &of);
         *p.nodes.last_mut().unwrap() = n + 5;
         wrong.push(p);
         // Lists cut short.
         for cut in [1, good.ints.len() / 2, good.ints.len() - 1] {
-            let mut p = encode(&grids[0], &cls, &bc);
+            let mut p = encode(&grids[0], &cls, &bc, &of);
             p.ints.truncate(cut);
             wrong.push(p);
         }
-        let mut p = encode(&grids[0], &cls, &bc);
+        let mut p = encode(&grids[0], &cls, &bc, &of);
         p.nodes.truncate(p.nodes.len() - 1);
         wrong.push(p);
-        let mut p = encode(&grids[0], &cls, &bc);
+        let mut p = encode(&grids[0], &cls, &bc, &of);
         p.floats.truncate(p.floats.len() / 2);
         wrong.push(p);
         for (k, p) in wrong.iter().enumerate() {
-            let err = decode(p)
+            let err = decode(p, 2, 0)
                 .err()
                 .unwrap_or_else(|| panic!("case {k} decoded"));
             assert!(
@@ -814,6 +880,9 @@ mod tests {
                 "case {k}: {err}"
             );
         }
-        assert!(decode(&good).is_ok());
+        assert!(decode(&good, 2, 0).is_ok());
+        // A ghost owned by the receiving rank, or by no rank of the job.
+        assert!(decode(&good, 2, 1).is_err());
+        assert!(decode(&good, 1, 0).is_err());
     }
 }
