@@ -4,7 +4,8 @@
 //! ([`mod@super::rcb`]) is the fallback when METIS refuses the graph (more than 2^31 edge ends
 //! for its 32-bit indices, out of memory) or leaves a part empty, and an option of its own.
 //!
-//! METIS minimises the cut edges under a 3 % imbalance of nodes; the cut edges are what
+//! METIS minimises the cut edges under a 3 % imbalance of the nodes' weights (the work of
+//! each, [`work_weights`], when rank 0 cuts for the deformation); the cut edges are what
 //! ghost nodes and halo bytes follow (docs/perf-log/2026-12-03-mpi-metis.md compares the two
 //! on the wing-body grid). Its result is deterministic (METIS's fixed seed) and does not
 //! depend on the thread count.
