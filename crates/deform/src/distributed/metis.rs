@@ -5,7 +5,7 @@
 //! for its 32-bit indices, out of memory) or leaves a part empty, and an option of its own.
 //!
 //! METIS minimises the cut edges under a 3 % imbalance of the nodes' weights (the work of
-//! each, [`work_weights`], when rank 0 cuts for the deformation); the cut edges are what
+//! each, `work_weights`, when rank 0 cuts for the deformation); the cut edges are what
 //! ghost nodes and halo bytes follow (docs/perf-log/2026-12-03-mpi-metis.md compares the two
 //! on the wing-body grid). Its result is deterministic (METIS's fixed seed) and does not
 //! depend on the thread count.
@@ -22,7 +22,7 @@ pub enum Partitioner {
     /// METIS k-way on the node graph; coordinate bisection when METIS fails.
     #[default]
     Metis,
-    /// Recursive coordinate bisection ([`rcb`]).
+    /// Recursive coordinate bisection ([`rcb`](super::rcb::rcb)).
     Rcb,
 }
 
