@@ -211,13 +211,11 @@ pub(crate) fn metis_in(
     let _alone = ONE_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let mut vwgt: Vec<metis::Idx> = Vec::new();
-    if !weight.is_empty() {
-        vwgt = vec![0; n];
-        for (old, &new) in perm.iter().enumerate() {
-            vwgt[new as usize] = metis::Idx::try_from(weight[old])
-                .map_err(|_| format!("node weight {} beyond METIS's indices", weight[old]))?;
-        }
+    // The weights in the graph's numbering.
+    let mut vwgt: Vec<metis::Idx> = vec![0; weight.len()];
+    for (old, &w) in weight.iter().enumerate() {
+        vwgt[perm[old] as usize] = metis::Idx::try_from(w)
+            .map_err(|_| format!("node weight {w} beyond METIS's indices"))?;
     }
     let mut graph = metis::Graph::new(1, nparts, &xadj, &adjncy)
         .map_err(|e| format!("METIS refused the node graph: {e}"))?;

@@ -25,8 +25,10 @@ pub fn rcb(coords: &[[f64; 3]], parts: usize) -> Vec<u32> {
 pub fn rcb_weighted(coords: &[[f64; 3]], parts: usize, weight: &[u32]) -> Vec<u32> {
     let mut part = vec![0u32; coords.len()];
     let mut idx: Vec<u32> = (0..coords.len() as u32).collect();
-    let w = |i: u32| weight.get(i as usize).map_or(1, |&w| u64::from(w));
-    split(coords, &mut idx, 0, parts.max(1), &mut part, &w);
+    // Every weight 1 (or none given): the plain median.
+    let w = (!weight.iter().all(|&w| w == 1))
+        .then_some(|i: u32| weight.get(i as usize).map_or(1, |&w| u64::from(w)));
+    split(coords, &mut idx, 0, parts.max(1), &mut part, w.as_ref());
     part
 }
 
@@ -36,7 +38,7 @@ fn split(
     first: u32,
     parts: usize,
     part: &mut [u32],
-    w: &impl Fn(u32) -> u64,
+    w: Option<&impl Fn(u32) -> u64>,
 ) {
     if parts <= 1 || idx.len() <= 1 {
         for &i in idx.iter() {
@@ -61,13 +63,8 @@ fn split(
             .total_cmp(&x[b as usize][axis])
             .then(a.cmp(&b))
     };
-    let total: u64 = idx.iter().map(|&i| w(i)).sum();
-    let cut = if total == idx.len() as u64 {
-        // Unit weights: the median, in linear time.
-        let cut = idx.len() * left / parts;
-        idx.select_nth_unstable_by(cut, along);
-        cut
-    } else {
+    let cut = if let Some(w) = w {
+        let total: u64 = idx.iter().map(|&i| w(i)).sum();
         // The weighted median: the first node along the axis whose weight, with the nodes
         // before it, passes the left parts' share. Found by halving the range it lies in,
         // each half put on its side by a linear-time selection; idx[lo..hi] holds the nodes
@@ -97,6 +94,11 @@ fn split(
         if cut != lo && cut < idx.len() {
             idx.select_nth_unstable_by(cut, along);
         }
+        cut
+    } else {
+        // Unit weights: the median, in linear time.
+        let cut = idx.len() * left / parts;
+        idx.select_nth_unstable_by(cut, along);
         cut
     };
     let (a, b) = idx.split_at_mut(cut);
@@ -336,6 +338,12 @@ mod tests {
         assert_eq!(rcb_weighted(&x[..2], 2, &[6, 1]), vec![0, 1]);
         assert_eq!(rcb_weighted(&x, 3, &[1, 1, 60]), vec![0, 1, 2]);
         assert_eq!(rcb_weighted(&x, 2, &[60, 1, 1]), vec![0, 1, 1]);
+        // Weights summing to the node count are not all 1: the weighted median.
+        let x: Vec<[f64; 3]> = (0..6).map(|i| [f64::from(i), 0.0, 0.0]).collect();
+        assert_eq!(
+            rcb_weighted(&x, 2, &[0, 0, 0, 0, 3, 3]),
+            vec![0, 0, 0, 0, 0, 1]
+        );
     }
 
     /// The cells of a grid as sorted lists of global nodes.

@@ -503,10 +503,8 @@ fn encode(g: &LocalGrid, cls: &Classified, bc: &BoundaryConditions, of: &Origin)
             .iter()
             .map(|&gid| u64::from(of.part[gid as usize])),
     );
-    let flagged = g.global_ids.iter().enumerate();
-    let flagged: Vec<u32> = flagged
-        .filter(|&(_, &gid)| of.boundary[gid as usize])
-        .map(|(i, _)| i as u32)
+    let flagged: Vec<u32> = (0..n as u32)
+        .filter(|&i| of.boundary[g.global_ids[i as usize] as usize])
         .collect();
     ints.push(flagged.len() as u64);
     nodes.extend(flagged);
