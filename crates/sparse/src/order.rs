@@ -157,15 +157,22 @@ pub fn level_order<'a, F>(n: usize, neighbours: F) -> Vec<u32>
 where
     F: Fn(usize) -> &'a [u32],
 {
+    level_order_from(n, &[], neighbours)
+}
+
+/// [`level_order`] from the nodes `seeds`, numbered first in the order given, then level set
+/// by level set away from them; the nodes they do not reach follow as in [`level_order`].
+/// A rank's part of a distributed grid seeded with the nodes next to its ghosts gets its
+/// interface in one block at the head of its numbering, so that the work done at the
+/// interface reads nearby memory. Every seed must be below `n`.
+pub fn level_order_from<'a, F>(n: usize, seeds: &[u32], neighbours: F) -> Vec<u32>
+where
+    F: Fn(usize) -> &'a [u32],
+{
     let mut seen = vec![false; n];
     let mut order: Vec<u32> = Vec::with_capacity(n);
-    for s0 in 0..n {
-        if seen[s0] {
-            continue;
-        }
-        seen[s0] = true;
-        let mut head = order.len();
-        order.push(s0 as u32);
+    // Numbers the nodes reached from order[head..], breadth-first.
+    let sweep = |order: &mut Vec<u32>, seen: &mut [bool], mut head: usize| {
         while head < order.len() {
             let i = order[head] as usize;
             head += 1;
@@ -175,6 +182,19 @@ where
                     order.push(j);
                 }
             }
+        }
+    };
+    for &s in seeds {
+        if !std::mem::replace(&mut seen[s as usize], true) {
+            order.push(s);
+        }
+    }
+    sweep(&mut order, &mut seen, 0);
+    for s0 in 0..n {
+        if !std::mem::replace(&mut seen[s0], true) {
+            let head = order.len();
+            order.push(s0 as u32);
+            sweep(&mut order, &mut seen, head);
         }
     }
     inverse(&order)
@@ -355,6 +375,37 @@ mod tests {
         assert!(
             after < 3 * nx * ny && after * 4 < before,
             "{before} -> {after}"
+        );
+    }
+
+    #[test]
+    fn level_order_from_seeds_numbers_them_and_their_levels_first() {
+        // A 12 × 10 grid in lexicographic order, seeded with its column i = 7 (an
+        // interface): the seeds come first, then the columns 6 and 8, then 5 and 9, …
+        let (nx, ny) = (12usize, 10usize);
+        let ident: Vec<u32> = (0..(nx * ny) as u32).collect();
+        let (g, _) = grid(nx, ny, 1, &ident);
+        let n = g.len();
+        let seeds: Vec<u32> = (0..ny).map(|j| (j * nx + 7) as u32).collect();
+        let perm = level_order_from(n, &seeds, |i| g.neighbours(i));
+        check_permutation(&perm, n).unwrap();
+        for (k, &s) in seeds.iter().enumerate() {
+            assert_eq!(perm[s as usize] as usize, k);
+        }
+        let col = |v: usize| (v % nx).abs_diff(7);
+        let order = inverse(&perm);
+        for w in order.windows(2) {
+            assert!(col(w[0] as usize) <= col(w[1] as usize), "{w:?}");
+        }
+        // No seeds: the plain breadth-first order; a second component is reached after.
+        assert_eq!(
+            level_order_from(n, &[], |i| g.neighbours(i)),
+            level_order(n, |i| g.neighbours(i))
+        );
+        let two = Graph::from_edges(5, &[[0, 1], [3, 4]]).unwrap();
+        assert_eq!(
+            level_order_from(5, &[4], |i| two.neighbours(i)),
+            vec![2, 3, 4, 1, 0]
         );
     }
 

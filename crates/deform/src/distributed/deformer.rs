@@ -237,7 +237,7 @@ impl<'c> Deformer<'c> {
         let node_of = if part.in_order {
             node_of
         } else {
-            locality_order(&node_of, &part.adj, &part.grid.mesh.coords)
+            locality_order(&node_of, &part.adj, &part.grid.mesh.coords, false)
         };
         let mut ghost: Vec<u32> = (n_owned..n)
             .filter(|&i| is_unk(i))
