@@ -19,8 +19,9 @@
 //! and B the block preconditioner,
 //! M = Q + (I − Q A) B,
 //! applied as z = y + P A_c⁻¹ (Pᵀ r − (A P)ᵀ y), y = B r: one pass over the stored rows of
-//! P and A P together, one all-reduce of 3 n_c values, one coarse solve and one pass over
-//! P, and no halo exchange. The conjugate gradients start from x₀ + Q r₀ ([`CoarseOp::start`]),
+//! P and A P together, one all-reduce of 6 n_c values (with Pᵀ r, so that r · z = r · y +
+//! (Pᵀ r) · c needs no pass over z), one coarse solve, and P c added in the conjugate
+//! gradients' update of their search direction; no halo exchange. The conjugate gradients start from x₀ + Q r₀ ([`CoarseOp::start`]),
 //! so that Pᵀ r₀ = 0; from such a start A-DEF2 gives the iterates of the balancing
 //! preconditioner (Mandel's BNN) M = Q + (I − Q A) B (I − A Q) in exact arithmetic, at half
 //! its coarse work (BNN applies A Q r and Pᵀ A y separately: two all-reduces, two coarse
@@ -353,27 +354,50 @@ impl CoarseOp {
         out
     }
 
-    /// A_c⁻¹ Σ_k (P_k r_k − (A P)_k y_k) over the owned rows k of every rank, that is
-    /// A_c⁻¹ (Pᵀ r − Pᵀ A y) (A symmetric), in one pass over the rows of P and A P
-    /// (collective).
-    pub fn coarse_of(&self, comm: &Comm, r: &[V3], y: Option<&[V3]>) -> Vec<V3> {
-        let mut t = vec![0.0; 3 * self.n];
+    /// A-DEF2's coarse correction of the residual `r` and the block's correction `y`,
+    /// c = A_c⁻¹ Σ_k (P_k r_k − (A P)_k y_k) over the owned rows k of every rank, that is
+    /// A_c⁻¹ (Pᵀ r − Pᵀ A y) (A symmetric), with what the conjugate gradients need of
+    /// z = y + P c without forming z: r · P c over the ranks (Σ_I (Pᵀ r)_I · c_I, all-reduced
+    /// with Pᵀ r − Pᵀ A y) and this rank's r · r and r · y, from the same pass over the rows
+    /// of P and A P. [`CoarseOp::update`] then adds P c in the update of the search
+    /// direction: one pass over the owned unknowns fewer per iteration (collective).
+    pub fn correction(&self, comm: &Comm, r: &[V3], y: Option<&[V3]>) -> Correction {
+        let n3 = 3 * self.n;
+        // Pᵀ r − (A P)ᵀ y, then Pᵀ r.
+        let mut t = vec![0.0; 2 * n3];
+        let (mut rr, mut ry) = (0.0, 0.0);
         for (k, rk) in r.iter().enumerate() {
             let yk = y.map_or([0.0; 3], |y| y[k]);
+            for q in 0..3 {
+                rr += rk[q] * rk[q];
+                ry += rk[q] * yk[q];
+            }
             for e in self.off[k]..self.off[k + 1] {
                 let (g, p, v) = (self.col[e] as usize, self.pv[e], self.apv[e]);
                 for q in 0..3 {
                     t[3 * g + q] += p * rk[q] - v * yk[q];
+                    t[n3 + 3 * g + q] += p * rk[q];
                 }
             }
         }
-        self.solve(&Self::all_sum(comm, t))
+        let t = Self::all_sum(comm, t);
+        let c = self.solve(&t[..n3]);
+        let r_pc = t[n3..]
+            .chunks_exact(3)
+            .zip(&c)
+            .map(|(p, c)| p[0] * c[0] + p[1] * c[1] + p[2] * c[2])
+            .sum();
+        Correction {
+            c,
+            r_pc,
+            dots: [rr, ry],
+        }
     }
 
     /// The start of the conjugate gradients: x += P c and r −= Π A P c, c = A_c⁻¹ Pᵀ r, so
     /// that Pᵀ r = 0 after (`project` is Π; collective).
     pub fn start(&self, comm: &Comm, x: &mut [V3], r: &mut [V3], project: impl Fn(&mut [V3])) {
-        let c = self.coarse_of(comm, r, None);
+        let c = self.correction(comm, r, None).c;
         self.add_prolonged(&c, x);
         for (k, rk) in r.iter_mut().enumerate() {
             for e in self.off[k]..self.off[k + 1] {
@@ -386,22 +410,22 @@ impl CoarseOp {
         project(r);
     }
 
-    /// z += P c on the owned unknowns, and r · r and r · z after it, in the same pass.
-    pub fn add_prolonged_dot(&self, c: &[V3], r: &[V3], z: &mut [V3]) -> [f64; 2] {
-        let (mut rr, mut rz) = (0.0, 0.0);
-        for (k, (zk, rk)) in z.iter_mut().zip(r).enumerate() {
+    /// The conjugate gradients' update with the preconditioned residual z = y + P c: x += α p,
+    /// then p = y + P c + β p, in one pass over the owned unknowns (as `axpy_xpby`).
+    pub fn update(&self, alpha: f64, x: &mut [V3], y: &[V3], c: &[V3], beta: f64, p: &mut [V3]) {
+        for (k, ((xk, pk), yk)) in x.iter_mut().zip(p.iter_mut()).zip(y).enumerate() {
+            let mut z = *yk;
             for e in self.p_off[k]..self.p_off[k + 1] {
-                let (g, p) = (self.p_col[e] as usize, self.p_val[e]);
+                let (g, v) = (self.p_col[e] as usize, self.p_val[e]);
                 for q in 0..3 {
-                    zk[q] += p * c[g][q];
+                    z[q] += v * c[g][q];
                 }
             }
             for q in 0..3 {
-                rr += rk[q] * rk[q];
-                rz += rk[q] * zk[q];
+                xk[q] += alpha * pk[q];
+                pk[q] = z[q] + beta * pk[q];
             }
         }
-        [rr, rz]
     }
 
     /// z += P c on the owned unknowns.
@@ -415,6 +439,16 @@ impl CoarseOp {
             }
         }
     }
+}
+
+/// What [`CoarseOp::correction`] gives.
+pub(crate) struct Correction {
+    /// c = A_c⁻¹ (Pᵀ r − Pᵀ A y), per aggregate.
+    pub c: Vec<V3>,
+    /// r · P c over the ranks.
+    pub r_pc: f64,
+    /// This rank's r · r and r · y.
+    pub dots: [f64; 2],
 }
 
 /// A sparse row summed in a dense index over the aggregates: each entry added to the

@@ -12,7 +12,7 @@ use std::time::Instant;
 use sparse::vec3::{V3, axpy, axpy_xpby, dot};
 use sparse::{Constraints, Csr, Jacobi, Preconditioner, SolveReport, SymMatrix};
 
-use super::coarse::CoarseOp;
+use super::coarse::{CoarseOp, Correction};
 use super::comm::{Comm, agree, max, sum, sum_n};
 use super::halo::Halo;
 use super::interface::{Interface, Ops, Scratch};
@@ -360,8 +360,10 @@ impl DistOperator {
 
     /// z = M r (projected), M the block preconditioner B alone, or with the coarse-grid
     /// correction Q = P A_c⁻¹ Pᵀ: M = Q + (I − Q A) B (A-DEF2, see [`super::coarse`];
-    /// collective); returns r · r and r · z on this rank's owned unknowns (with the
-    /// coarse-grid correction, from its last pass over z).
+    /// collective). Returns r · r and r · z on this rank's owned unknowns; with the
+    /// coarse-grid correction, `z` holds y = B r and z = y + P c is left to the update
+    /// ([`CoarseOp::update`]): the dots are r · r and r · y, and the correction carries c
+    /// and r · P c over the ranks.
     fn precondition(
         &self,
         comm: &Comm,
@@ -370,7 +372,7 @@ impl DistOperator {
         r: &[V3],
         z: &mut [V3],
         w: &mut Work,
-    ) -> [f64; 2] {
+    ) -> ([f64; 2], Option<Correction>) {
         let n = self.n_own;
         let ops = Ops {
             own: self.own(),
@@ -398,11 +400,13 @@ impl DistOperator {
                 cons.project(z);
             }
         }
-        if let Some(coarse) = &self.coarse {
-            let c = coarse.coarse_of(comm, r, Some(z));
-            return coarse.add_prolonged_dot(&c, r, z);
+        match &self.coarse {
+            Some(coarse) => {
+                let c = coarse.correction(comm, r, Some(z));
+                (c.dots, Some(c))
+            }
+            None => ([dot(r, r), dot(r, z)], None),
         }
-        [dot(r, r), dot(r, z)]
     }
 
     /// r = Π(b − A x) (`full[..n]` receives x); returns |r|² over the ranks.
@@ -488,11 +492,12 @@ impl DistOperator {
         };
         let mut it = 0;
         if rr.sqrt() > rel_tol * scale {
-            let mut rz = sum(
-                comm,
-                self.precondition(comm, halo, cons, &r, &mut z, &mut w)[1],
-            );
+            let (dots, c) = self.precondition(comm, halo, cons, &r, &mut z, &mut w);
+            let mut rz = sum(comm, dots[1]) + c.as_ref().map_or(0.0, |c| c.r_pc);
             full[..n].copy_from_slice(&z);
+            if let (Some(coarse), Some(c)) = (&self.coarse, &c) {
+                coarse.add_prolonged(&c.c, &mut full[..n]);
+            }
             while it < opts.max_iters {
                 it += 1;
                 let pq = sum(comm, self.mul_dot(comm, halo, &mut full, &mut q));
@@ -502,8 +507,9 @@ impl DistOperator {
                 cons.project(&mut q);
                 let alpha = rz / pq;
                 axpy(-alpha, &q, &mut r);
-                let dots = self.precondition(comm, halo, cons, &r, &mut z, &mut w);
+                let (dots, c) = self.precondition(comm, halo, cons, &r, &mut z, &mut w);
                 let [rr, rz_new] = sum_n(comm, dots);
+                let rz_new = rz_new + c.as_ref().map_or(0.0, |c| c.r_pc);
                 if rr.sqrt() <= rel_tol * scale || it == opts.max_iters {
                     axpy(alpha, &full[..n], x);
                     break;
@@ -511,7 +517,12 @@ impl DistOperator {
                 let beta = rz_new / rz;
                 rz = rz_new;
                 // x += α p and the next direction in one pass over p.
-                axpy_xpby(alpha, x, &z, beta, &mut full[..n]);
+                match (&self.coarse, &c) {
+                    (Some(coarse), Some(c)) => {
+                        coarse.update(alpha, x, &z, &c.c, beta, &mut full[..n]);
+                    }
+                    _ => axpy_xpby(alpha, x, &z, beta, &mut full[..n]),
+                }
             }
         }
         let res = self
