@@ -16,7 +16,7 @@ use super::coarse::{CoarseOp, CoarseSpace};
 use super::comm::{Comm, agree, max, min, sum_n, sum_u64};
 use super::halo::Halo;
 use super::metis::Partitioner;
-use super::partition::{LocalGrid, Partition, locality_order};
+use super::partition::{LocalGrid, Partition, Start, locality_order};
 use super::report::DistState;
 pub use super::report::{DistDeformed, DistReport, DistSeconds};
 use super::rfield::{Ctx, rotations};
@@ -237,7 +237,7 @@ impl<'c> Deformer<'c> {
         let node_of = if part.in_order {
             node_of
         } else {
-            locality_order(&node_of, &part.adj, &part.grid.mesh.coords, false)
+            locality_order(&node_of, &part.adj, &part.grid.mesh.coords, Start::Corner)
         };
         let mut ghost: Vec<u32> = (n_owned..n)
             .filter(|&i| is_unk(i))

@@ -63,8 +63,9 @@ impl Partition {
     }
 
     /// [`Partition::new`], then the owned nodes renumbered as the serial solver numbers a
-    /// grid ([`locality_order`]; the ghosts keep their order), for a part whose numbering is
-    /// the library's own (made on rank 0). Returns the renumbering (`perm[old] = new`, the
+    /// grid, breadth-first from the interface ([`locality_order`] from [`Start::Interface`];
+    /// the ghosts keep their order), for a part whose numbering is the library's own.
+    /// Returns the renumbering (`perm[old] = new`, the
     /// convention of `sparse::order`).
     pub(crate) fn ordered(comm: &Comm, grid: LocalGrid) -> Result<(Self, Vec<u32>)> {
         let (p, perm) = Self::build(comm, grid, true)?;
@@ -75,7 +76,8 @@ impl Partition {
     /// of its ghosts (`ghost_owner`, in the order of its ghosts) as rank 0 cut them: it is
     /// consistent by construction, so the checks of a given part and the owners' directory
     /// are skipped (0.11 s of each rank's 0.75 s at 1M nodes on 2 ranks). Renumbered as
-    /// [`Partition::ordered`] does. Collective.
+    /// [`Partition::ordered`] does, from the Morton order rank 0 gave its nodes
+    /// ([`Start::InterfaceInMorton`]). Collective.
     pub(crate) fn made(
         comm: &Comm,
         grid: LocalGrid,
@@ -87,7 +89,14 @@ impl Partition {
         owner[n_owned..].copy_from_slice(ghost_owner);
         let adj = Adjacency::try_build(&grid.mesh).map_err(|e| fail(comm, e.to_string()));
         let adj = agree(comm, adj)?;
-        let (p, perm) = Self::finish(comm, grid, owner, n_global, adj, true)?;
+        let (p, perm) = Self::finish(
+            comm,
+            grid,
+            owner,
+            n_global,
+            adj,
+            Some(Start::InterfaceInMorton),
+        )?;
         Ok((p, perm.unwrap_or_default()))
     }
 
@@ -226,7 +235,8 @@ impl Partition {
         }
         agree(comm, missing)?;
         drop(local_of);
-        Self::finish(comm, grid, owner, n_global, adj, reorder)
+        let start = reorder.then_some(Start::Interface);
+        Self::finish(comm, grid, owner, n_global, adj, start)
     }
 
     /// The part's renumbering in locality order (with `reorder`) and its node halo, once
@@ -237,12 +247,12 @@ impl Partition {
         mut owner: Vec<i32>,
         n_global: u64,
         mut adj: Adjacency,
-        reorder: bool,
+        reorder: Option<Start>,
     ) -> Result<(Self, Option<Vec<u32>>)> {
         let n = grid.mesh.n_nodes();
-        let perm = reorder.then(|| {
+        let perm = reorder.map(|start| {
             let owned: Vec<u32> = (0..grid.n_owned as u32).collect();
-            let order = locality_order(&owned, &adj, &grid.mesh.coords, true);
+            let order = locality_order(&owned, &adj, &grid.mesh.coords, start);
             let mut perm: Vec<u32> = (0..n as u32).collect();
             for (new, &old) in order.iter().enumerate() {
                 perm[old as usize] = new as u32;
@@ -279,7 +289,7 @@ impl Partition {
                 n_global,
                 adj,
                 halo,
-                in_order: reorder,
+                in_order: reorder.is_some(),
             },
             perm,
         ))
@@ -296,6 +306,22 @@ impl Partition {
     }
 }
 
+/// Where [`locality_order`] starts its breadth-first order, and whether its nodes need the
+/// Morton curve first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Start {
+    /// Nodes in any order: along a Morton curve, then breadth-first from its first node.
+    Corner,
+    /// A rank's owned nodes in any order (a given part): along a Morton curve, then
+    /// breadth-first from the interface.
+    Interface,
+    /// A part made on rank 0, whose owned nodes come along the whole grid's Morton curve
+    /// already: breadth-first from the interface (a Morton order of its own took 0.03 s
+    /// and the graph's renumbering in it 0.04 s at 1M nodes on 2 ranks, for the same
+    /// iterations).
+    InterfaceInMorton,
+}
+
 /// The nodes `nodes` renumbered as the serial solver numbers the grid
 /// (`crate::Deformer`'s renumbering): along a Morton curve, then breadth-first over the
 /// graph of `nodes`, so that a row's neighbours lie close in memory; returns the nodes in
@@ -304,18 +330,18 @@ impl Partition {
 /// volume) one rank took ~3× the serial time per iteration
 /// (docs/perf-log/2026-12-03-mpi-round2.md).
 ///
-/// With `interface_first`, the breadth-first order starts from the nodes with a neighbour
-/// outside `nodes` (for a part's owned nodes, those next to its ghosts), in Morton order:
-/// the interface, where the halo packs its messages and the interface smoother
-/// (`super::interface`) works on a few percent of the rows, is then one block of memory.
-/// At 1M nodes on 2 ranks the smoother took 0.10–0.12 s per solve against 0.18–0.23 s in
-/// the order from a corner, with the same iterations
+/// From the interface ([`Start::Interface`]), the breadth-first order starts from the nodes
+/// with a neighbour outside `nodes` (for a part's owned nodes, those next to its ghosts), in
+/// Morton order: the interface, where the halo packs its messages and the interface
+/// smoother (`super::interface`) works on a few percent of the rows, is then one block of
+/// memory. At 1M nodes on 2 ranks the smoother took 0.10–0.12 s per solve against
+/// 0.18–0.23 s in the order from a corner, with the same iterations
 /// (docs/perf-log/2026-12-05-mpi-interface-first.md).
 pub(crate) fn locality_order(
     nodes: &[u32],
     adj: &Adjacency,
     coords: &[[f64; 3]],
-    interface_first: bool,
+    start: Start,
 ) -> Vec<u32> {
     let m = nodes.len();
     if m < 2 {
@@ -336,11 +362,20 @@ pub(crate) fn locality_order(
         );
         off.push(nb.len());
     }
-    let xs: Vec<[f64; 3]> = nodes.iter().map(|&i| coords[i as usize]).collect();
-    let morton = order::morton_order(&xs);
-    let g = order::permute_graph(m, |k| &nb[off[k]..off[k + 1]], &morton);
+    let morton: Vec<u32> = if start == Start::InterfaceInMorton {
+        (0..m as u32).collect()
+    } else {
+        let xs: Vec<[f64; 3]> = nodes.iter().map(|&i| coords[i as usize]).collect();
+        order::morton_order(&xs)
+    };
+    let (off, nb) = if start == Start::InterfaceInMorton {
+        (off, nb)
+    } else {
+        let g = order::permute_graph(m, |k| &nb[off[k]..off[k + 1]], &morton);
+        (g.offsets, g.adj)
+    };
     let mut seeds: Vec<u32> = Vec::new();
-    if interface_first {
+    if start != Start::Corner {
         seeds.extend(
             nodes
                 .iter()
@@ -354,10 +389,47 @@ pub(crate) fn locality_order(
         );
         seeds.sort_unstable();
     }
-    let level = order::level_order_from(m, &seeds, |a| &g.adj[g.offsets[a]..g.offsets[a + 1]]);
+    let level = order::level_order_from(m, &seeds, |a| &nb[off[a]..off[a + 1]]);
     let mut out = vec![0u32; m];
     for (&i, &p) in nodes.iter().zip(&order::then(&morton, &level)) {
         out[p as usize] = i;
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locality_order_from_the_interface_numbers_the_interface_first() {
+        // The nodes with x < 1 of a box: those next to a node with x ≥ 1 are the interface.
+        let m = mesh::generate::box_tets(8, 5, 4, [0.0; 3], [2.0, 1.0, 1.0]);
+        let adj = Adjacency::build(&m);
+        let inside = |i: u32| m.coords[i as usize][0] < 1.0 - 1e-9;
+        let owned: Vec<u32> = (0..m.n_nodes() as u32).filter(|&i| inside(i)).collect();
+        let edge = |i: &u32| adj.neighbours(*i as usize).iter().any(|&j| !inside(j));
+        let n_edge = owned.iter().filter(|i| edge(i)).count();
+        assert!(n_edge > 0 && n_edge < owned.len());
+        // The same nodes along the grid's Morton curve, as rank 0 sends a made part.
+        let morton = order::morton_order(&m.coords);
+        let mut in_morton = owned.clone();
+        in_morton.sort_unstable_by_key(|&i| morton[i as usize]);
+        for (nodes, start) in [
+            (&owned, Start::Interface),
+            (&in_morton, Start::InterfaceInMorton),
+        ] {
+            let out = locality_order(nodes, &adj, &m.coords, start);
+            let mut sorted = out.clone();
+            sorted.sort_unstable();
+            assert_eq!(sorted, owned, "{start:?}: not a renumbering of the nodes");
+            assert!(
+                out[..n_edge].iter().all(edge),
+                "{start:?}: interface not first"
+            );
+        }
+        // From a corner, the interface is spread over the numbering.
+        let out = locality_order(&owned, &adj, &m.coords, Start::Corner);
+        assert!(!out[..n_edge].iter().all(edge));
+    }
 }
