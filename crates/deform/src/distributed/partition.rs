@@ -334,8 +334,8 @@ pub(crate) enum Start {
 /// with a neighbour outside `nodes` (for a part's owned nodes, those next to its ghosts), in
 /// Morton order: the interface, where the halo packs its messages and the interface
 /// smoother (`super::interface`) works on a few percent of the rows, is then one block of
-/// memory. At 1M nodes on 2 ranks the smoother took 0.10–0.12 s per solve against
-/// 0.18–0.23 s in the order from a corner, with the same iterations
+/// memory. At 1M nodes on 2 ranks the smoother took 0.10–0.13 s per solve against
+/// 0.18–0.24 s in the order from a corner, with the same iterations
 /// (docs/perf-log/2026-12-05-mpi-interface-first.md).
 pub(crate) fn locality_order(
     nodes: &[u32],
