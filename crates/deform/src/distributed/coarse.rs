@@ -21,11 +21,12 @@
 //! applied as z = y + P A_c⁻¹ (Pᵀ r − (A P)ᵀ y), y = B r: one pass over the stored rows of
 //! P and A P together, one all-reduce of 6 n_c values (with Pᵀ r, so that r · z = r · y +
 //! (Pᵀ r) · c needs no pass over z), one coarse solve, and P c added in the conjugate
-//! gradients' update of their search direction; no halo exchange. The conjugate gradients start from x₀ + Q r₀ ([`CoarseOp::start`]),
-//! so that Pᵀ r₀ = 0; from such a start A-DEF2 gives the iterates of the balancing
-//! preconditioner (Mandel's BNN) M = Q + (I − Q A) B (I − A Q) in exact arithmetic, at half
-//! its coarse work (BNN applies A Q r and Pᵀ A y separately: two all-reduces, two coarse
-//! solves and four passes). Measured: docs/perf-log/2026-12-03-mpi-adef2.md.
+//! gradients' update of their search direction; no halo exchange. The conjugate gradients
+//! start from x₀ + Q r₀ ([`CoarseOp::start`]), so that Pᵀ r₀ = 0; from such a start A-DEF2
+//! gives the iterates of the balancing preconditioner (Mandel's BNN)
+//! M = Q + (I − Q A) B (I − A Q) in exact arithmetic, at half its coarse work (BNN applies
+//! A Q r and Pᵀ A y separately: two all-reduces, two coarse solves and four passes).
+//! Measured: docs/perf-log/2026-12-03-mpi-adef2.md.
 
 use std::sync::Arc;
 
