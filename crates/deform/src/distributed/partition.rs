@@ -362,36 +362,40 @@ pub(crate) fn locality_order(
         );
         off.push(nb.len());
     }
-    let morton: Vec<u32> = if start == Start::InterfaceInMorton {
-        (0..m as u32).collect()
-    } else {
+    // The nodes' Morton order (None: they come in it) and their graph in that order.
+    let morton = (start != Start::InterfaceInMorton).then(|| {
         let xs: Vec<[f64; 3]> = nodes.iter().map(|&i| coords[i as usize]).collect();
         order::morton_order(&xs)
-    };
-    let (off, nb) = if start == Start::InterfaceInMorton {
-        (off, nb)
-    } else {
-        let g = order::permute_graph(m, |k| &nb[off[k]..off[k + 1]], &morton);
-        (g.offsets, g.adj)
+    });
+    let (off, nb) = match &morton {
+        Some(perm) => {
+            let g = order::permute_graph(m, |k| &nb[off[k]..off[k + 1]], perm);
+            (g.offsets, g.adj)
+        }
+        None => (off, nb),
     };
     let mut seeds: Vec<u32> = Vec::new();
     if start != Start::Corner {
         seeds.extend(
             nodes
                 .iter()
-                .zip(&morton)
-                .filter(|&(&i, _)| {
+                .enumerate()
+                .filter(|&(_, &i)| {
                     adj.neighbours(i as usize)
                         .iter()
                         .any(|&j| at[j as usize] == u32::MAX)
                 })
-                .map(|(_, &k)| k),
+                .map(|(k, _)| morton.as_ref().map_or(k as u32, |p| p[k])),
         );
         seeds.sort_unstable();
     }
     let level = order::level_order_from(m, &seeds, |a| &nb[off[a]..off[a + 1]]);
+    let new = match &morton {
+        Some(perm) => order::then(perm, &level),
+        None => level,
+    };
     let mut out = vec![0u32; m];
-    for (&i, &p) in nodes.iter().zip(&order::then(&morton, &level)) {
+    for (&i, &p) in nodes.iter().zip(&new) {
         out[p as usize] = i;
     }
     out

@@ -85,12 +85,9 @@ fn split(
         // hi = lo + 1: the node of rank lo is the first to pass the share. A node heavier
         // than a part's share would leave a part without nodes: each side keeps at least
         // one node per part.
-        let cut = lo.clamp(
-            left.min(idx.len()),
-            idx.len()
-                .saturating_sub(parts - left)
-                .max(left.min(idx.len())),
-        );
+        let least = left.min(idx.len());
+        let most = idx.len().saturating_sub(parts - left).max(least);
+        let cut = lo.clamp(least, most);
         if cut != lo && cut < idx.len() {
             idx.select_nth_unstable_by(cut, along);
         }
