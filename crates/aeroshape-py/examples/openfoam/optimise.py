@@ -2,7 +2,7 @@
 """Drag at fixed lift of the ONERA M6 half wing, with OpenFOAM's flow and adjoint in the loop.
 
 usage: python optimise.py [--work DIR] [--maxiter N] [--vars NAME,…] [--bound-fraction F]
-                          [--no-volume] [--kind normal|vector]
+                          [--no-volume] [--kind normal|vector] [--gradient adjoint|fd]
 
 An OpenMDAO problem (docs/optimisation.md): the design variables are the wing master's
 eight variables of `aeroshape case init` on fixtures/openfoam/m6_coarse/m6_coarse.su2
@@ -43,6 +43,9 @@ class FoamWing(om.ExplicitComponent):
 
     def initialize(self):
         self.options.declare("loop", types=wingloop.Loop, recordable=False)
+        self.options.declare("gradient", default="adjoint", values=("adjoint", "fd"))
+        self.options.declare("fd_variables", default=[], types=list)
+        self.options.declare("fd_step", default=0.2, types=float)
 
     def setup(self):
         loop = self.options["loop"]
@@ -83,7 +86,10 @@ class FoamWing(om.ExplicitComponent):
         d = self._design(inputs)
         loop = self.options["loop"]
         try:
-            g = loop.gradients(d)
+            if self.options["gradient"] == "adjoint":
+                g = loop.gradients(d)
+            else:
+                g = loop.fd_gradients(d, self.options["fd_variables"], self.options["fd_step"])
         except wingloop.DesignError as e:
             raise om.AnalysisError(str(e)) from e
         for out, key, s in (("CD", "cd", 1.0), ("CL", "cl", 1.0),
@@ -115,22 +121,29 @@ class SurvivingSLSQP(om.ScipyOptimizeDriver):
 
 
 def build(loop: wingloop.Loop, *, variables: list[str], bound_fraction: float,
-          volume: bool, cl0: float, cd0: float, maxiter: int) -> om.Problem:
+          volume: bool, cl0: float, cd0: float, maxiter: int, gradient: str = "adjoint",
+          fd_step: float = 0.2) -> om.Problem:
     study = loop.study
     prob = om.Problem(reports=False)
-    prob.model.add_subsystem("wing", FoamWing(loop=loop), promotes=["*"])
+    prob.model.add_subsystem("wing", FoamWing(loop=loop, gradient=gradient,
+                                              fd_variables=variables + ["alpha"],
+                                              fd_step=fd_step), promotes=["*"])
     idx = [study.names.index(v) for v in variables]
     dvs = study.design_variables
     x0 = study.initial
     lower = np.array([x0[i] + bound_fraction * (dvs[i].lower - x0[i]) for i in idx])
     upper = np.array([x0[i] + bound_fraction * (dvs[i].upper - x0[i]) for i in idx])
-    ref = np.array([dvs[i].scale for i in idx])
+    # Scaling: a variable's unit is half its range, the objective's 1 % of C_D0, so that
+    # SLSQP's first step (its Hessian starts as the identity) is a fraction of the range
+    # (with the variables' own scales and ref C_D0 the gradient was ~1e-3 and SLSQP stopped
+    # after one step of 1e-5 rad, its change of f below its tolerance).
+    ref = (upper - lower) / 2
     prob.model.add_design_var("x", indices=idx, lower=lower, upper=upper, ref=ref)
     prob.model.add_design_var("alpha", lower=2.0, upper=6.0, ref=1.0)
-    prob.model.add_objective("CD", ref=cd0)
-    prob.model.add_constraint("CL", equals=cl0, ref=cl0)
+    prob.model.add_objective("CD", ref=0.01 * cd0)
+    prob.model.add_constraint("CL", equals=cl0, ref=0.01 * cl0)
     if volume:
-        prob.model.add_constraint("volume_ratio", lower=1.0)
+        prob.model.add_constraint("volume_ratio", lower=1.0, ref=0.01)
     c = study.constraints
     if len(c):
         raise SystemExit("the case has linear constraints; this script does not add them")
@@ -147,7 +160,12 @@ def main():
     ap.add_argument("--vars", default="", help="comma-separated variables (default: all)")
     ap.add_argument("--bound-fraction", type=float, default=0.5)
     ap.add_argument("--no-volume", action="store_true")
-    ap.add_argument("--kind", choices=("normal", "vector"), default="normal")
+    ap.add_argument("--kind", choices=("normal", "vector"), default="vector",
+                    help="the adjoint's wall seed: the whole E-SI vector or its normal part")
+    ap.add_argument("--gradient", choices=("adjoint", "fd"), default="adjoint",
+                    help="the adjoint, or forward differences of the flow (one solve a variable)")
+    ap.add_argument("--fd-step", type=float, default=0.2,
+                    help="forward-difference step, in units of each variable's scale (α: °)")
     a = ap.parse_args()
     if not wingloop.fc.available():
         raise SystemExit("OpenFOAM (simpleFoam, adjointOptimisationFoam, checkMesh) not found")
@@ -167,14 +185,15 @@ def main():
     log(f"variables {variables}; V0 = {loop.v0:.6e} m^3")
     d0 = loop.design(loop.study.initial, loop.flow.alpha_deg)
     prob = build(loop, variables=variables, bound_fraction=a.bound_fraction,
-                 volume=not a.no_volume, cl0=d0.cl, cd0=d0.cd, maxiter=a.maxiter)
+                 volume=not a.no_volume, cl0=d0.cl, cd0=d0.cd, maxiter=a.maxiter,
+                 gradient=a.gradient, fd_step=a.fd_step)
     prob.model.wing.current = d0  # the driver's first evaluation is this design
     log(f"initial: CD {d0.cd:.8f} CL {d0.cl:.8f}")
     prob.run_driver()
     d = prob.model.wing.current
     summary = {
         "variables": variables, "names": loop.study.names, "bound_fraction": a.bound_fraction,
-        "volume_constraint": not a.no_volume, "kind": a.kind,
+        "volume_constraint": not a.no_volume, "kind": a.kind, "gradient": a.gradient,
         "initial": {"cd": d0.cd, "cl": d0.cl, "volume": d0.volume, "x": d0.x.tolist(),
                     "alpha": d0.alpha, "index": d0.index},
         "final": {"cd": float(prob["CD"][0]), "cl": float(prob["CL"][0]),

@@ -66,6 +66,15 @@ class Wing:
         t = fc.latest_time(case)
         p = fc.read_point_field(case / t / "p", "scalar")  # the internalField (cells)
         self.cp = p[owner] / (0.5 * u_inf ** 2)
+        used = xyz[np.unique(self.tri)]
+        self.box = (used.min(axis=0), used.max(axis=0))
+
+    def frame(self, ax, other: "Wing", pad: float = 0.03) -> None:
+        """Limits the axes (x, y) to the two wings (the points list the whole grid)."""
+        lo = np.minimum(self.box[0], other.box[0]) - pad
+        hi = np.maximum(self.box[1], other.box[1]) + pad
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
 
     def section(self, y0: float):
         """Segments of the plane y = y0 through the wing faces: (k × 2 × 3 points, face)."""
@@ -112,8 +121,8 @@ def plot_history(evals, grads, summary, out: Path):
         a.set_ylabel(label)
         a.grid(alpha=0.3)
     ax[0, 1].axhline(summary["initial"]["cl"], color="C3", lw=0.8, ls="--", label="$C_{L0}$")
-    ax[0, 0].legend(fontsize=8)
-    ax[0, 1].legend(fontsize=8)
+    ax[0, 0].legend(fontsize=8, loc="upper right")
+    ax[0, 1].legend(fontsize=8, loc="upper right")
     v0 = summary["initial"]["volume"]
     ax[1, 0].plot(n, [r["volume"] / v0 for r in ok], ".-", color="C2")
     ax[1, 0].axhline(1.0, color="C3", lw=0.8, ls="--")
@@ -138,6 +147,7 @@ def plot_planform(w0: Wing, w1: Wing, out: Path):
         up = w.normal[:, 2] < 0
         ax.triplot(w.xyz[:, 0], w.xyz[:, 1], w.tri[up], color=col, lw=0.4)
         ax.plot([], [], color=col, label=lab)
+    w0.frame(ax, w1)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
@@ -167,7 +177,7 @@ def plot_sections(w0: Wing, w1: Wing, out: Path):
 
 
 def plot_cp(w0: Wing, w1: Wing, out: Path):
-    fig = plt.figure(figsize=(10, 7), dpi=90)
+    fig = plt.figure(figsize=(10, 8.5), dpi=90)
     lo = min(w0.cp.min(), w1.cp.min())
     hi = max(w0.cp.max(), w1.cp.max())
     for k, (w, title) in enumerate(((w0, "initial"), (w1, "final"))):
@@ -175,6 +185,7 @@ def plot_cp(w0: Wing, w1: Wing, out: Path):
         up = w.normal[:, 2] < 0
         tc = a.tripcolor(w.xyz[:, 0], w.xyz[:, 1], w.tri[up], facecolors=w.cp[up],
                          cmap="viridis", vmin=lo, vmax=hi)
+        w0.frame(a, w1)
         a.set_aspect("equal")
         a.set_title(f"$C_p$ upper surface, {title}", fontsize=9)
         a.set_xlabel("x (m)")
@@ -199,6 +210,7 @@ def plot_cp(w0: Wing, w1: Wing, out: Path):
         if k == 0:
             a.set_ylabel("$C_p$")
             a.legend(fontsize=8)
+    fig.subplots_adjust(hspace=0.35)
     fig.savefig(out, bbox_inches="tight")
     plt.close(fig)
 

@@ -272,6 +272,41 @@ class Loop:
             out = dict(out, by_kind=by_kind)
         return out
 
+    def fd_gradients(self, d: Design, variables: list[str], step: float) -> dict:
+        """dC_D, dC_L by forward differences of the whole flow solution, one design per
+        variable in `variables` (a study variable or "alpha"; the step is `step` × its scale,
+        α: `step` degrees), the others zero; dV exactly (as in `gradients`). The
+        reference when the adjoint's wall sensitivities are too coarse (docs/optimisation.md)."""
+        t0 = time.perf_counter()
+        names = self.study.names
+        g = {"cd": [np.zeros(len(names)), 0.0], "cl": [np.zeros(len(names)), 0.0]}
+        scales = {dv.name: dv.scale for dv in self.study.design_variables}
+        for v in variables:
+            x, al = d.x.copy(), d.alpha
+            h = step * (1.0 if v == "alpha" else scales[v])
+            if v == "alpha":
+                al += h
+            else:
+                x[names.index(v)] += h
+            p = self.design(x, al)
+            for key in ("cd", "cl"):
+                dj = (getattr(p, key) - getattr(d, key)) / h
+                if v == "alpha":
+                    g[key][1] = dj
+                else:
+                    g[key][0][names.index(v)] = dj
+            if not self.keep:
+                shutil.rmtree(p.case, ignore_errors=True)
+        lin = self.study.linearise(d.x, allow_infeasible=True, allow_out_of_bounds=True)
+        _, gv = self.volume(lin.volume_coordinates)
+        out = {k: (v[0], float(v[1])) for k, v in g.items()}
+        out["volume"] = (np.asarray(lin.vjp(wall_bar=gv)), 0.0)
+        d.seconds["fd"] = time.perf_counter() - t0
+        d.grad = out
+        self.log(f"design {d.index}: finite-difference gradients ({len(variables)} designs, "
+                 f"{d.seconds['fd']:.1f} s)")
+        return out
+
     def record(self, d: Design, **extra) -> None:
         with open(self.history_path, "a") as f:
             f.write(json.dumps(dict(d.record(), **extra)) + "\n")
