@@ -370,6 +370,10 @@ pub struct Mesh {
     pub physical_names: Vec<PhysicalName>,
     /// Unknown trailing sections of an SU2 file (e.g. FFD boxes), kept verbatim.
     pub su2_extra: String,
+    /// The OpenFOAM case the grid was read from ([`crate::foam::read`]), which
+    /// [`crate::foam::write`] writes back with new points.
+    #[serde(default)]
+    pub foam: Option<Box<crate::foam::Source>>,
     /// Non-fatal remarks made while reading (skipped sections, dropped elements).
     pub warnings: Vec<String>,
 }

@@ -1,5 +1,5 @@
-//! Unstructured CFD grids: types, readers and writers (SU2, Gmsh MSH 4.1, VTK XML), node
-//! classification, node adjacency and quality measures.
+//! Unstructured CFD grids: types, readers and writers (SU2, Gmsh MSH 4.1, VTK XML, OpenFOAM
+//! polyMesh), node classification, node adjacency and quality measures.
 //!
 //! Layer: directly under `intersect` in the workspace order; knows nothing of `geom-db`.
 //! A node is classified by entity dimension, entity id and parametric coordinates, as Gmsh
@@ -11,6 +11,7 @@
 //! - [`su2`]: SU2 native ASCII reader and writer.
 //! - [`vtu`]: VTK XML unstructured grid writer and reader (ParaView).
 //! - [`msh`]: Gmsh MSH 4.1 reader and writer (ASCII and binary, entities, parametric nodes).
+//! - [`foam`]: OpenFOAM polyMesh reader, and writer back into the case it came from.
 //! - [`io`]: reading and writing by file extension.
 //! - [`generate`]: structured tetrahedral boxes for tests and benchmarks.
 //! - [`quality`]: signed mean ratio, minimum angles, summaries, grid comparison.
@@ -20,6 +21,7 @@
 
 pub mod adjacency;
 pub mod error;
+pub mod foam;
 pub mod generate;
 pub mod grid;
 pub mod io;

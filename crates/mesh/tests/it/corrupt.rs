@@ -27,6 +27,7 @@ fn read(f: Format, data: &[u8]) -> mesh::Result<mesh::Mesh> {
         Format::Su2 => mesh::su2::read(data, name),
         Format::Msh(_) => mesh::msh::read(data, name),
         Format::Vtu(_) => mesh::vtu::read(data, name),
+        Format::Foam => unreachable!("OpenFOAM cases are directories: tests/it/foam.rs"),
     }
 }
 

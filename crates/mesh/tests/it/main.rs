@@ -3,6 +3,7 @@
 mod adjacency;
 mod common;
 mod corrupt;
+mod foam;
 mod msh;
 mod oracle;
 mod quality;
