@@ -211,7 +211,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     let format = mesh::io::Format::from_path(&args.output);
     if format.is_none() && !pieces {
         bail!(
-            "{}: unknown output format (use .su2, .msh or .vtu)",
+            "{}: unknown output format (use .su2, .msh, .vtu or an OpenFOAM case directory)",
             args.output.display()
         );
     }
@@ -276,7 +276,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     let t = Instant::now();
     let mut out = m;
     deform::request::apply(&mut out, &d);
-    aeroshape::fsio::write_atomic(&args.output, |w| mesh::io::write(&out, format, w))?;
+    crate::mesh::write_grid(&out, format, &args.output)?;
     let write = t.elapsed().as_secs_f64();
     if let Some(b) = &bar {
         b.finish_and_clear();

@@ -172,8 +172,7 @@ fn deform_on(
                     let mut m = m;
                     m.coords = coords;
                     put_parameters(&mut m, supports.as_deref().unwrap_or_default());
-                    aeroshape::fsio::write_atomic(&args.output, |w| mesh::io::write(&m, format, w))
-                        .map_err(anyhow::Error::from)
+                    crate::mesh::write_grid(&m, format, &args.output)
                         .and_then(|()| {
                             report(
                                 args,

@@ -203,7 +203,7 @@ fn convert(a: &ConvertArgs) -> anyhow::Result<()> {
         }),
         Some(f) => f,
         None => bail!(
-            "{}: unknown output format (use .su2, .msh or .vtu)",
+            "{}: unknown output format (use .su2, .msh, .vtu or an OpenFOAM case directory)",
             a.output.display()
         ),
     };
@@ -222,6 +222,17 @@ fn convert(a: &ConvertArgs) -> anyhow::Result<()> {
     if format != Format::Su2 && !m.su2_extra.is_empty() {
         eprintln!("note: the SU2 trailing sections (e.g. FFD boxes) are only kept in .su2 output");
     }
-    aeroshape::fsio::write_atomic(&a.output, |w| mesh::io::write(&m, format, w))?;
+    write_grid(&m, format, &a.output)
+}
+
+/// Writes a grid at `path` in `format`: a file through a temporary name renamed into place,
+/// or an OpenFOAM case (the case the grid was read from, with its `points` replaced;
+/// `mesh::foam::write`).
+pub(crate) fn write_grid(m: &Mesh, format: Format, path: &Path) -> anyhow::Result<()> {
+    if mesh::io::is_directory(format) {
+        mesh::io::write_path(m, format, path)?;
+    } else {
+        aeroshape::fsio::write_atomic(path, |w| mesh::io::write(m, format, w))?;
+    }
     Ok(())
 }

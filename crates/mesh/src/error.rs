@@ -123,7 +123,9 @@ pub enum Error {
     /// let err = mesh::io::read_path("grid.cgns".as_ref()).unwrap_err();
     /// assert!(matches!(err, mesh::Error::UnknownFormat { .. }));
     /// ```
-    #[error("{file}: unknown grid format (expected .su2, .msh, .vtu or an OpenFOAM case directory)")]
+    #[error(
+        "{file}: unknown grid format (expected .su2, .msh, .vtu or an OpenFOAM case directory)"
+    )]
     UnknownFormat {
         /// The file name.
         file: String,

@@ -438,3 +438,59 @@ fn node_on_two_sliding_planes_keeps_to_their_line() {
         );
     }
 }
+
+/// `deform` of an OpenFOAM case (the gmshToFoam M6 fixture) into a new case: the wing pitched,
+/// the symmetry plane sliding; only `constant/polyMesh/points` differs from the input's files.
+#[test]
+fn openfoam_case_in_openfoam_case_out_with_points_only_changed() {
+    let src = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/openfoam/m6_coarse"
+    ));
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("pitched");
+    let o = bin()
+        .arg("deform")
+        .arg(src)
+        .arg("-o")
+        .arg(&out)
+        .args([
+            "--rigid",
+            "wing",
+            "--rotate-deg",
+            "2",
+            "--axis-point",
+            "0.2,0,0",
+        ])
+        .args(["--axis-dir", "0,1,0", "--slide", "symmetry"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let poly = |c: &Path, f: &str| std::fs::read(c.join("constant/polyMesh").join(f)).unwrap();
+    for f in ["faces", "owner", "neighbour", "boundary"] {
+        assert!(poly(src, f) == poly(&out, f), "{f} changed");
+    }
+    assert!(poly(src, "points") != poly(&out, "points"));
+    for f in ["m6_coarse.su2", "drag/pointSensVecadjESI"] {
+        assert!(std::fs::read(src.join(f)).unwrap() == std::fs::read(out.join(f)).unwrap());
+    }
+    let (a, b) = (read(src), read(&out));
+    assert_eq!(a.cells, b.cells);
+    assert_eq!(a.markers, b.markers);
+    // a wing node rotated by 2° about the y axis through (0.2, 0, 0) (Eq. 34)
+    let v = a.marker("wing").unwrap().elements.node_set()[7] as usize;
+    let (s, c) = 2f64.to_radians().sin_cos();
+    let (dx, dz) = (a.coords[v][0] - 0.2, a.coords[v][2]);
+    testkit::assert_close!(b.coords[v][0], 0.2 + c * dx + s * dz, abs = 1e-12);
+    testkit::assert_close!(b.coords[v][2], -s * dx + c * dz, abs = 1e-12);
+    // the input case is never the output
+    let o = bin()
+        .arg("deform")
+        .arg(src)
+        .arg("-o")
+        .arg(src)
+        .args(["--rigid", "wing"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+}

@@ -125,7 +125,10 @@ pub(crate) fn shape(faces: &[Vec<u32>]) -> Option<(ElementKind, Vec<u32>)> {
                 .iter()
                 .map(|&x| across(faces, x, t))
                 .collect::<Option<Vec<u32>>>()?;
-            (ElementKind::Prism, vec![t[0], t[1], t[2], top[0], top[1], top[2]])
+            (
+                ElementKind::Prism,
+                vec![t[0], t[1], t[2], top[0], top[1], top[2]],
+            )
         }
         (0, 6) => {
             let q = quads[0];

@@ -386,33 +386,6 @@ impl FoamFile {
         }
     }
 
-    /// A list of scalars `N ( … )`, or `N{v}`.
-    pub fn scalars(&mut self, what: &str) -> Result<Vec<f64>> {
-        let n = self.count()?;
-        self.skip_blank();
-        if self.peek() == Some(b'{') {
-            self.pos += 1;
-            let v = self.ascii_scalar(what)?;
-            self.expect(b'}')?;
-            return Ok(vec![v; n]);
-        }
-        self.expect(b'(')?;
-        let mut out = Vec::new();
-        reserve_capped(&mut out, n);
-        if self.layout.binary {
-            let w = usize::from(self.layout.scalar_bytes);
-            let raw = self.binary_block(n, w, what)?.to_vec();
-            out.extend(raw.chunks_exact(w).map(|c| self.scalar_bytes(c)));
-        } else {
-            for _ in 0..n {
-                out.push(self.ascii_scalar(what)?);
-            }
-        }
-        self.expect(b')')
-            .map_err(|_| self.err(format!("{what}: more than {n} entries")))?;
-        Ok(out)
-    }
-
     /// A list of vectors `N ( (x y z) … )` (binary: 3 scalars each), or `N{(x y z)}`.
     pub fn vectors(&mut self, what: &str) -> Result<Vec<[f64; 3]>> {
         let n = self.count()?;

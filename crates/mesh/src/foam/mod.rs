@@ -15,9 +15,9 @@
 //! other file is copied byte for byte (the case's `system/`, `constant/`, `0/` and other
 //! files; not `processor*/`, `postProcessing/` or time directories other than `0`), each
 //! through a temporary name renamed into place. The output is a case directory, or a
-//! `…/constant/polyMesh` directory (then only the polyMesh is written). A grid not read from
-//! OpenFOAM cannot be written as OpenFOAM (its faces would have to be made): an error says
-//! so.
+//! `…/constant/polyMesh` directory (then only the polyMesh is written); never the polyMesh
+//! the grid was read from (inputs are not overwritten). A grid not read from OpenFOAM cannot
+//! be written as OpenFOAM (its faces would have to be made): an error says so.
 
 mod cells;
 mod file;
@@ -156,7 +156,10 @@ fn boundary(f: &mut FoamFile) -> Result<Vec<Patch>> {
                 b"nFaces" | b"startFace" => {
                     let v = f.ascii_label("a patch entry")?;
                     let v = usize::try_from(v).map_err(|_| {
-                        f.err(format!("patch {name}: negative {}", String::from_utf8_lossy(&key)))
+                        f.err(format!(
+                            "patch {name}: negative {}",
+                            String::from_utf8_lossy(&key)
+                        ))
                     })?;
                     if key == b"nFaces" {
                         count = Some(v);

@@ -159,7 +159,15 @@ pub fn write(mesh: &Mesh, out: &Path) -> Result<()> {
     let canon = |p: &Path| p.canonicalize().map_err(|e| io_err(p, e));
     let out_poly_c = canon(&out_poly)?;
     let src_poly_c = canon(&src.poly_mesh)?;
-    if out_poly_c != src_poly_c {
+    if out_poly_c == src_poly_c {
+        return Err(Error::Invalid {
+            what: format!(
+                "{}: this is the polyMesh the grid was read from; inputs are never overwritten (write a new case)",
+                out.display()
+            ),
+        });
+    }
+    {
         let out_c = canon(out)?;
         let mut skip = vec![out_c];
         for name in ["points", "points.gz"] {

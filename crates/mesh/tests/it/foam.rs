@@ -50,7 +50,10 @@ fn all_corners_positive(m: &Mesh) -> Result<(), String> {
         for c in corners(k) {
             let v = tet_volume(c.map(|j| x[n[j] as usize]));
             if v <= 0.0 {
-                return Err(format!("{} cell {i} {n:?}: corner {c:?} volume {v}", k.name()));
+                return Err(format!(
+                    "{} cell {i} {n:?}: corner {c:?} volume {v}",
+                    k.name()
+                ));
             }
         }
     }
@@ -126,7 +129,11 @@ fn block_mesh_cavity_in_ascii_binary_and_gzip_reads_the_same() {
         .collect();
     assert_eq!(
         names,
-        [("movingWall", 20), ("fixedWalls", 60), ("frontAndBack", 800)]
+        [
+            ("movingWall", 20),
+            ("fixedWalls", 60),
+            ("frontAndBack", 800)
+        ]
     );
     let src = a.foam.as_deref().unwrap();
     assert!(!src.points_layout.binary);
@@ -137,14 +144,22 @@ fn block_mesh_cavity_in_ascii_binary_and_gzip_reads_the_same() {
         assert_eq!(b.cells, a.cells, "{name}");
         assert_eq!(b.markers, a.markers, "{name}");
         let l = b.foam.as_deref().unwrap().points_layout;
-        assert_eq!((l.binary, l.label_bytes, l.scalar_bytes), (name == "cavity_binary", 4, 8));
+        assert_eq!(
+            (l.binary, l.label_bytes, l.scalar_bytes),
+            (name == "cavity_binary", 4, 8)
+        );
     }
 }
 
 #[test]
 fn a_polyhedral_cell_is_refused_by_name() {
-    let err = mesh::io::read_path(&cavity("cavity_dual")).unwrap_err().to_string();
-    assert!(err.contains("faces: cell ") && err.contains("is a polyhedron"), "{err}");
+    let err = mesh::io::read_path(&cavity("cavity_dual"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("faces: cell ") && err.contains("is a polyhedron"),
+        "{err}"
+    );
 }
 
 /// Every file under `dir`, relative, with its bytes.
@@ -157,7 +172,10 @@ fn tree(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
             if p.is_dir() {
                 stack.push(p);
             } else {
-                out.push((p.strip_prefix(dir).unwrap().to_path_buf(), std::fs::read(&p).unwrap()));
+                out.push((
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                ));
             }
         }
     }
@@ -187,11 +205,24 @@ fn write_back_changes_points_only_and_reads_back_exactly() {
         let names = |t: &[(PathBuf, Vec<u8>)]| t.iter().map(|(p, _)| p.clone()).collect::<Vec<_>>();
         assert_eq!(names(&a), names(&b), "{name}: the same files");
         for ((p, x), (_, y)) in a.iter().zip(&b) {
-            let is_points = p.file_name().unwrap().to_string_lossy().starts_with("points");
-            assert_eq!(x == y, !is_points, "{name}: {} changed: {}", p.display(), x != y);
+            let is_points = p
+                .file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("points");
+            assert_eq!(
+                x == y,
+                !is_points,
+                "{name}: {} changed: {}",
+                p.display(),
+                x != y
+            );
         }
         let r = mesh::io::read_path(&out).unwrap();
-        assert_eq!(r.coords, m.coords, "{name}: the points read back bit for bit");
+        assert_eq!(
+            r.coords, m.coords,
+            "{name}: the points read back bit for bit"
+        );
         assert_eq!(r.cells, m.cells);
         // the same layout and header
         let (sa, sb) = (m.foam.as_deref().unwrap(), r.foam.as_deref().unwrap());
@@ -220,7 +251,11 @@ fn a_grid_from_another_format_or_of_another_size_is_not_written_as_openfoam() {
     let tmp = tempfile::tempdir().unwrap();
     let b = mesh::generate::box_tets(1, 1, 1, [0.0; 3], [1.0; 3]);
     let err = mesh::io::write_path(&b, mesh::io::Format::Foam, &tmp.path().join("c")).unwrap_err();
-    assert!(err.to_string().contains("written back from a grid read from one"), "{err}");
+    assert!(
+        err.to_string()
+            .contains("written back from a grid read from one"),
+        "{err}"
+    );
     let mut m = mesh::io::read_path(&cavity("cavity")).unwrap();
     m.coords.pop();
     let err = mesh::io::write_path(&m, mesh::io::Format::Foam, &tmp.path().join("c")).unwrap_err();
@@ -233,7 +268,8 @@ fn widen_labels(src: &Path, dst: &Path) {
     std::fs::create_dir_all(dst).unwrap();
     for name in ["points", "faces", "owner", "neighbour", "boundary"] {
         let bytes = std::fs::read(src.join(name)).unwrap();
-        let text_end = |b: &[u8], from: usize| b[from..].iter().position(|&c| c == b'(').unwrap() + from;
+        let text_end =
+            |b: &[u8], from: usize| b[from..].iter().position(|&c| c == b'(').unwrap() + from;
         let out = if name == "points" || name == "boundary" {
             bytes.clone()
         } else {
@@ -362,4 +398,28 @@ fn check_mesh_accepts_the_written_cases_and_refuses_an_inverted_one() {
     mesh::io::write_path(&c, mesh::io::Format::Foam, &out).unwrap();
     let (ok, log) = check_mesh(&out).unwrap();
     assert!(!ok, "checkMesh accepted a folded cavity:\n{log}");
+}
+
+#[test]
+fn the_input_case_is_never_overwritten() {
+    let tmp = tempfile::tempdir().unwrap();
+    let case = tmp.path().join("c");
+    let m = mesh::io::read_path(&cavity("cavity")).unwrap();
+    mesh::io::write_path(&m, mesh::io::Format::Foam, &case).unwrap();
+    let mut c = mesh::io::read_path(&case).unwrap();
+    bend(&mut c);
+    let before = std::fs::read(case.join("constant/polyMesh/points")).unwrap();
+    for out in [case.clone(), case.join("constant/polyMesh")] {
+        let err = mesh::io::write_path(&c, mesh::io::Format::Foam, &out).unwrap_err();
+        assert!(err.to_string().contains("never overwritten"), "{err}");
+    }
+    assert_eq!(
+        std::fs::read(case.join("constant/polyMesh/points")).unwrap(),
+        before
+    );
+    // a case inside the input case is written without copying itself into itself
+    let inner = case.join("deformed");
+    mesh::io::write_path(&c, mesh::io::Format::Foam, &inner).unwrap();
+    assert!(!inner.join("deformed").exists());
+    assert_eq!(mesh::io::read_path(&inner).unwrap().coords, c.coords);
 }
