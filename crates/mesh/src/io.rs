@@ -92,7 +92,7 @@ pub fn is_directory(format: Format) -> bool {
 }
 
 /// Writes an OpenFOAM grid back into a case at `path` ([`crate::foam::write`]; each file
-/// through a temporary name). Other formats are single files: use [`write`] on a temporary
+/// through a temporary name). Other formats are single files: use [`write()`] on a temporary
 /// file renamed into place (`aeroshape::fsio::write_atomic`).
 pub fn write_path(mesh: &Mesh, format: Format, path: &Path) -> Result<()> {
     match format {

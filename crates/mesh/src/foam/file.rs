@@ -205,6 +205,22 @@ impl FoamFile {
         }
     }
 
+    /// The next word or double-quoted string (quotes removed); at the end, the error `msg`.
+    pub fn name_or(&mut self, msg: &str) -> Result<String> {
+        self.skip_blank();
+        if self.peek() == Some(b'"') {
+            let start = self.pos + 1;
+            match self.bytes[start..].iter().position(|&c| c == b'"') {
+                Some(k) => {
+                    self.pos = start + k + 1;
+                    return Ok(String::from_utf8_lossy(&self.bytes[start..start + k]).into_owned());
+                }
+                None => return Err(self.err("unterminated string")),
+            }
+        }
+        Ok(String::from_utf8_lossy(self.word_or(msg)?).into_owned())
+    }
+
     /// Expects the character `c` after blanks.
     pub fn expect(&mut self, c: u8) -> Result<()> {
         self.skip_blank();
@@ -345,7 +361,7 @@ impl FoamFile {
 
     /// `n` items of `w` bytes of binary data at the cursor.
     fn binary_block(&mut self, n: usize, w: usize, what: &str) -> Result<&[u8]> {
-        let len = n.checked_mul(w).unwrap_or(usize::MAX);
+        let len = n.saturating_mul(w);
         if self.bytes.len() - self.pos < len {
             return Err(Error::Truncated {
                 file: self.name.clone(),
@@ -372,7 +388,7 @@ impl FoamFile {
         }
     }
 
-    fn ascii_scalar(&mut self, what: &str) -> Result<f64> {
+    pub fn ascii_scalar(&mut self, what: &str) -> Result<f64> {
         let at = self.pos;
         let w = self.word_or(&format!("file ends inside {what}"))?;
         match parse_f64(w).filter(|v| v.is_finite()) {
@@ -384,6 +400,33 @@ impl FoamFile {
                 Err(self.err(format!("{what}: {w:?} is not a finite number")))
             }
         }
+    }
+
+    /// A list of scalars `N ( … )`, or `N{v}`.
+    pub fn scalars(&mut self, what: &str) -> Result<Vec<f64>> {
+        let n = self.count()?;
+        self.skip_blank();
+        if self.peek() == Some(b'{') {
+            self.pos += 1;
+            let v = self.ascii_scalar(what)?;
+            self.expect(b'}')?;
+            return Ok(vec![v; n]);
+        }
+        self.expect(b'(')?;
+        let mut out = Vec::new();
+        reserve_capped(&mut out, n);
+        if self.layout.binary {
+            let w = usize::from(self.layout.scalar_bytes);
+            let raw = self.binary_block(n, w, what)?.to_vec();
+            out.extend(raw.chunks_exact(w).map(|c| self.scalar_bytes(c)));
+        } else {
+            for _ in 0..n {
+                out.push(self.ascii_scalar(what)?);
+            }
+        }
+        self.expect(b')')
+            .map_err(|_| self.err(format!("{what}: more than {n} entries")))?;
+        Ok(out)
     }
 
     /// A list of vectors `N ( (x y z) … )` (binary: 3 scalars each), or `N{(x y z)}`.

@@ -2,15 +2,15 @@
 //! neighbour, boundary}` of a case, ASCII or binary, labels of 32 or 64 bits and scalars of
 //! 32 or 64 bits as each file's header `arch` says, gzipped files (`points.gz`) too.
 //!
-//! Reading ([`read`], given the case directory or its `constant/polyMesh`): the points are
+//! Reading ([`read()`], given the case directory or its `constant/polyMesh`): the points are
 //! the grid's nodes, in OpenFOAM's order; each cell is rebuilt from its faces (`owner`,
-//! `neighbour`) and recognised as a tetrahedron, pyramid, prism or hexahedron (see `cells`
-//! below for the node orders); every patch with faces becomes a [`Marker`](crate::Marker) of
+//! `neighbour`) and recognised as a tetrahedron, pyramid, prism or hexahedron (node orders in
+//! docs/formats/openfoam.md); every patch with faces becomes a [`Marker`] of
 //! its triangles and quadrilaterals, named as the patch (patches with no face are left out,
 //! with a warning). A polyhedral cell is an error naming the cell, since the grid type holds
 //! those four kinds only. The case is remembered in [`Mesh::foam`](crate::Mesh::foam).
 //!
-//! Writing ([`write`]) is writing back: the output is the input case with its `points`
+//! Writing ([`write()`]) is writing back: the output is the input case with its `points`
 //! replaced by the grid's nodes, in the points file's own format, header and precision. Every
 //! other file is copied byte for byte (the case's `system/`, `constant/`, `0/` and other
 //! files; not `processor*/`, `postProcessing/` or time directories other than `0`), each
@@ -18,8 +18,12 @@
 //! `…/constant/polyMesh` directory (then only the polyMesh is written); never the polyMesh
 //! the grid was read from (inputs are not overwritten). A grid not read from OpenFOAM cannot
 //! be written as OpenFOAM (its faces would have to be made): an error says so.
+//!
+//! Fields ([`read_field`]): the `internalField` and the patches' `value`s of a field file,
+//! for the adjoint sensitivities that `aeroshape gradient` reads.
 
 mod cells;
+mod field;
 mod file;
 mod write;
 
@@ -29,6 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::grid::{ElementKind, Elements, Marker, Mesh};
+pub use field::{Field, Values, read_field};
 use file::FoamFile;
 pub use file::Layout;
 pub use write::write;
@@ -46,7 +51,7 @@ pub struct Patch {
     pub n_faces: usize,
 }
 
-/// Where a grid read by [`read`] came from: what [`write`] needs to write it back.
+/// Where a grid read by [`read()`] came from: what [`write()`] needs to write it back.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Source {
     /// The case directory, when the polyMesh is its `constant/polyMesh`.
@@ -187,8 +192,45 @@ fn boundary(f: &mut FoamFile) -> Result<Vec<Patch>> {
     Ok(out)
 }
 
-/// Reads the OpenFOAM case or polyMesh directory `path` (see the module doc).
-pub fn read(path: &Path) -> Result<Mesh> {
+/// The polyMesh files as OpenFOAM holds them, checked (labels in range, one owner per face,
+/// patches contiguous): what [`read()`] builds a grid from, and what the readers of
+/// OpenFOAM's fields need (the patches' faces in their order).
+#[derive(Debug, Clone)]
+pub struct PolyMesh {
+    /// The case directory, when the polyMesh is its `constant/polyMesh`.
+    pub case: Option<PathBuf>,
+    /// The polyMesh directory.
+    pub dir: PathBuf,
+    /// The points.
+    pub points: Vec<[f64; 3]>,
+    /// Face `f` is `face_points[face_offsets[f]..face_offsets[f + 1]]`.
+    pub face_offsets: Vec<usize>,
+    /// The faces' points.
+    pub face_points: Vec<u32>,
+    /// The owner cell of each face.
+    pub owner: Vec<u32>,
+    /// The neighbour cell of each internal face.
+    pub neighbour: Vec<u32>,
+    /// The patches.
+    pub patches: Vec<Patch>,
+    points_file: (String, Layout, Vec<u8>, Vec<u8>),
+    faces_file: String,
+}
+
+impl PolyMesh {
+    /// The points of face `f`.
+    pub fn face(&self, f: usize) -> &[u32] {
+        &self.face_points[self.face_offsets[f]..self.face_offsets[f + 1]]
+    }
+
+    /// The patch called `name`.
+    pub fn patch(&self, name: &str) -> Option<&Patch> {
+        self.patches.iter().find(|p| p.name == name)
+    }
+}
+
+/// Reads the polyMesh of the case or polyMesh directory `path`.
+pub fn read_poly_mesh(path: &Path) -> Result<PolyMesh> {
     let (case, dir) = locate(path)?;
     let points_name = file::find(&dir, "points")
         .and_then(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
@@ -204,16 +246,12 @@ pub fn read(path: &Path) -> Result<Mesh> {
     let mut ff = open(&dir, "faces")?;
     let (off, labels) = ff.faces()?;
     let pts = indices(&ff, &labels, n_points, "face point")?;
-    let faces = cells::Faces {
-        off: &off,
-        pts: &pts,
-    };
-    if let Some(f) = (0..faces.len()).find(|&f| faces.face(f).len() < 3) {
+    if let Some(f) = (0..off.len() - 1).find(|&f| off[f + 1] - off[f] < 3) {
         return Err(Error::Invalid {
-            what: format!("{}: face {f} has {} points", ff.name, faces.face(f).len()),
+            what: format!("{}: face {f} has {} points", ff.name, off[f + 1] - off[f]),
         });
     }
-    let n_faces = faces.len();
+    let n_faces = off.len() - 1;
     let mut of = open(&dir, "owner")?;
     let owner = of.labels("owner")?;
     if owner.len() != n_faces {
@@ -234,7 +272,6 @@ pub fn read(path: &Path) -> Result<Mesh> {
     }
     let owner = indices(&of, &owner, u64::from(u32::MAX), "owner of face")?;
     let neighbour = indices(&nf, &neighbour, u64::from(u32::MAX), "neighbour of face")?;
-    let n_cells = owner.iter().chain(&neighbour).max().map_or(0, |&c| c + 1) as usize;
     let mut bf = open(&dir, "boundary")?;
     let patches = boundary(&mut bf)?;
     let n_internal = neighbour.len();
@@ -262,9 +299,43 @@ pub fn read(path: &Path) -> Result<Mesh> {
         });
     }
 
-    let (cells, cell_of_element) = cells::cells(&ff.name, &faces, &owner, &neighbour, n_cells)?;
+    Ok(PolyMesh {
+        case,
+        dir,
+        points: coords,
+        face_offsets: off,
+        face_points: pts,
+        owner,
+        neighbour,
+        patches,
+        points_file: (points_name, pf.layout, points_head, points_tail),
+        faces_file: ff.name,
+    })
+}
+
+/// Reads the OpenFOAM case or polyMesh directory `path` (see the module doc).
+pub fn read(path: &Path) -> Result<Mesh> {
+    let pm = read_poly_mesh(path)?;
+    let faces = cells::Faces {
+        off: &pm.face_offsets,
+        pts: &pm.face_points,
+    };
+    let (owner, neighbour) = (&pm.owner, &pm.neighbour);
+    let n_cells = owner.iter().chain(neighbour).max().map_or(0, |&c| c + 1) as usize;
+    let n_faces = faces.len();
+    let n_internal = neighbour.len();
+    let (cells, cell_of_element) = cells::cells(&pm.faces_file, &faces, owner, neighbour, n_cells)?;
     let mut mesh = Mesh::new(3);
-    mesh.coords = coords;
+    let PolyMesh {
+        case,
+        dir,
+        points,
+        patches,
+        points_file: (points_name, points_layout, points_head, points_tail),
+        faces_file,
+        ..
+    } = pm;
+    mesh.coords = points;
     mesh.cells = cells;
     for p in &patches {
         if p.n_faces == 0 {
@@ -283,7 +354,7 @@ pub fn read(path: &Path) -> Result<Mesh> {
                     return Err(Error::Invalid {
                         what: format!(
                             "{}: face {f} of patch {} has {k} points (boundary faces must be triangles or quadrilaterals)",
-                            ff.name, p.name
+                            faces_file, p.name
                         ),
                     });
                 }
@@ -300,7 +371,7 @@ pub fn read(path: &Path) -> Result<Mesh> {
         case,
         poly_mesh: dir,
         points_name,
-        points_layout: pf.layout,
+        points_layout,
         points_head,
         points_tail,
         patches,

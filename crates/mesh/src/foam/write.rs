@@ -74,7 +74,7 @@ fn copy_tree(src: &Path, dst: &Path, skip: &[PathBuf], top: bool) -> Result<()> 
     for e in entries {
         let p = e.path();
         let canon = p.canonicalize().map_err(|err| io_err(&p, err))?;
-        if skip.iter().any(|s| *s == canon) {
+        if skip.contains(&canon) {
             continue;
         }
         let is_dir = canon.is_dir();
