@@ -198,6 +198,44 @@ impl Operator {
 }
 
 impl Operator {
+    /// [`Operator::solve_linear`] for the linearisation's products, with a fallback: should
+    /// the solver not reach `rel_tol` in `max_iters`, Jacobi-preconditioned CG from zero,
+    /// with the iteration limit scaled with the problem (at least twice the unknowns' count:
+    /// CG's exact-arithmetic bound per component, with room for round-off). The report of
+    /// the solve that converged, or of the fallback when neither did; the iterations of
+    /// both are counted.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_linear_or_fallback(
+        &self,
+        b: &[V3],
+        x: &mut [V3],
+        cons: &Constraints,
+        blocks: &[(u32, Block3)],
+        rel_tol: f64,
+        max_iters: usize,
+    ) -> SolveReport {
+        let start = x.to_vec();
+        let rep = self.solve_linear(b, x, cons, blocks, rel_tol, max_iters);
+        if rep.converged {
+            return rep;
+        }
+        let op = WithBlocks {
+            a: self.matrix(),
+            blocks,
+        };
+        let so = SolveOptions {
+            rel_tol,
+            max_iters: max_iters.max(2 * self.matrix().n()),
+        };
+        // From the caller's start (the multigrid's iterate may have been spoiled by a
+        // breakdown); pcg itself drops a start worse than zero.
+        x.copy_from_slice(&start);
+        let mut fb = pcg(&op, b, x, &Jacobi::new(self.matrix()), cons, &so);
+        fb.iterations += rep.iterations;
+        fb.solver = format!("{} then {}", rep.solver, fb.solver);
+        fb
+    }
+
     /// The constrained multigrid for `cons` (the last one built, when its held components
     /// are the same).
     fn held(&self, cons: &Constraints) -> Result<Arc<HeldAmg>> {

@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::constraint::{Constraints, ProjectedRhs};
 use crate::operator::LinearOperator;
 use crate::precond::{Preconditioner, Weights};
-use crate::vec3::{CHUNK, V3, axpy, axpy_xpby, chunked_sum, dot, norm, ordered_sum};
+use crate::vec3::{CHUNK, V3, axpy, axpy_xpby, chunked_sum, dot, ordered_sum};
 
 /// Stopping rule and limits of an iterative solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -50,6 +50,15 @@ pub struct SolveReport {
 /// in the subspace of `cons` (b, x and the search directions are projected; the preconditioned
 /// residual too). `a` is any symmetric [`LinearOperator`] (a [`crate::SymMatrix`], or one with
 /// 3×3 blocks added, [`crate::WithBlocks`]). Deterministic for any thread count.
+///
+/// Safeguards, so that any right-hand side converges (issue 44: single-entry adjoint seeds):
+/// - a zero (projected) right-hand side returns x = 0 at once, the exact solution;
+/// - an initial guess whose residual exceeds |b| (the residual of x = 0), e.g. the solution
+///   of another right-hand side, is replaced by zero;
+/// - when the recurrence's residual has reached the tolerance but the true residual
+///   |b − A x| (recomputed) has not — round-off drift, largest when the solution is large
+///   against b —, CG restarts from x with the true residual, up to [`RESTARTS`] times and
+///   within `max_iters` in all.
 pub fn pcg<P: Preconditioner + ?Sized, A: LinearOperator + ?Sized>(
     a: &A,
     b: &[V3],
@@ -63,12 +72,6 @@ pub fn pcg<P: Preconditioner + ?Sized, A: LinearOperator + ?Sized>(
     let bp = ProjectedRhs::new(b, cons);
     cons.project(x);
     let bnorm = bp.norm();
-    let mut r = vec![[0.0; 3]; n];
-    let mut rr = bp.residual(a, x, &mut r);
-    cons.project(&mut r);
-    if !cons.is_empty() {
-        rr = dot(&r, &r);
-    }
     let report = |it: usize, res: f64, t0: Instant| SolveReport {
         solver: format!("pcg-{}", m.name()),
         iterations: it,
@@ -76,22 +79,81 @@ pub fn pcg<P: Preconditioner + ?Sized, A: LinearOperator + ?Sized>(
         converged: res <= opts.rel_tol,
         seconds: t0.elapsed().as_secs_f64(),
     };
-    // With a zero right-hand side the tolerance is absolute (x = 0 returns at once).
-    let scale = if bnorm > 0.0 { bnorm } else { 1.0 };
-    if rr.sqrt() <= opts.rel_tol * scale {
-        return report(0, rr.sqrt() / scale, t0);
+    if bnorm == 0.0 {
+        x.fill([0.0; 3]);
+        return report(0, 0.0, t0);
+    }
+    let mut r = vec![[0.0; 3]; n];
+    let mut rr = true_residual(&bp, a, x, cons, &mut r);
+    if rr > bnorm * bnorm {
+        x.fill([0.0; 3]);
+        rr = true_residual(&bp, a, x, cons, &mut r);
+    }
+    let tol = opts.rel_tol * bnorm;
+    let mut it = 0;
+    let mut restarts = 0;
+    loop {
+        if rr.sqrt() <= tol {
+            break;
+        }
+        let before = rr.sqrt();
+        it += cg_run(a, x, &mut r, rr, m, cons, tol, opts.max_iters - it);
+        // The true residual (the recurrence's r drifts from it by round-off).
+        rr = true_residual(&bp, a, x, cons, &mut r);
+        // Restart only while it pays: iterations left and the run reduced the residual.
+        if it >= opts.max_iters || restarts == RESTARTS || rr.sqrt() >= 0.5 * before {
+            break;
+        }
+        restarts += 1;
+    }
+    report(it, rr.sqrt() / bnorm, t0)
+}
+
+/// At most this many restarts of CG from its iterate ([`pcg`]).
+pub const RESTARTS: usize = 4;
+
+/// r ← P (P b − A x); returns |r|².
+fn true_residual<A: LinearOperator + ?Sized>(
+    bp: &ProjectedRhs,
+    a: &A,
+    x: &[V3],
+    cons: &Constraints,
+    r: &mut [V3],
+) -> f64 {
+    bp.residual(a, x, r);
+    cons.project(r);
+    dot(r, r)
+}
+
+/// CG iterations from `x` with its residual `r` (|r|² = `rr`) until the recurrence's
+/// residual is at most `tol`, the direction breaks down or `budget` iterations are done;
+/// returns the iterations done (x updated; r is the recurrence's residual).
+#[allow(clippy::too_many_arguments)]
+fn cg_run<P: Preconditioner + ?Sized, A: LinearOperator + ?Sized>(
+    a: &A,
+    x: &mut [V3],
+    r: &mut [V3],
+    mut rr: f64,
+    m: &P,
+    cons: &Constraints,
+    tol: f64,
+    budget: usize,
+) -> usize {
+    let n = a.n();
+    if budget == 0 || rr.sqrt() <= tol {
+        return 0;
     }
     let mut z = vec![[0.0; 3]; n];
     // q (A p) is dead while the preconditioner runs: it lends it as scratch.
     let mut q = vec![[0.0; 3]; n];
     // r · z before z is projected: r lies in the constraints' subspace and the projections
     // are orthogonal, so r · P z = P r · z = r · z.
-    let mut rz = m.apply_dot(&r, &mut z, &mut q);
+    let mut rz = m.apply_dot(r, &mut z, &mut q);
     cons.project(&mut z);
     let mut p = z.clone();
     let first = m.first_pass();
     let mut it = 0;
-    while it < opts.max_iters {
+    while it < budget {
         it += 1;
         let pq = a.mul_dot(&p, &mut q);
         cons.project(&mut q);
@@ -101,17 +163,17 @@ pub fn pcg<P: Preconditioner + ?Sized, A: LinearOperator + ?Sized>(
         let alpha = rz / pq;
         // q is dead once r is updated: it receives the preconditioner's first pass W r.
         rr = match first {
-            Some(w) => update_residual_scaled(alpha, &mut q, &mut r, w),
-            None => update_residual(alpha, &q, &mut r),
+            Some(w) => update_residual_scaled(alpha, &mut q, r, w),
+            None => update_residual(alpha, &q, r),
         };
-        if rr.sqrt() <= opts.rel_tol * scale || it == opts.max_iters {
+        if rr.sqrt() <= tol || it == budget {
             axpy(alpha, &p, x);
             break;
         }
         let rz_new = if first.is_some() {
-            m.apply_dot_prescaled(&r, &mut z, &mut q)
+            m.apply_dot_prescaled(r, &mut z, &mut q)
         } else {
-            m.apply_dot(&r, &mut z, &mut q)
+            m.apply_dot(r, &mut z, &mut q)
         };
         cons.project(&mut z);
         let beta = rz_new / rz;
@@ -119,11 +181,7 @@ pub fn pcg<P: Preconditioner + ?Sized, A: LinearOperator + ?Sized>(
         // x += α p and the next direction in one pass over p.
         axpy_xpby(alpha, x, &z, beta, &mut p);
     }
-    // True residual (in z's storage: not needed any more).
-    let rtrue = &mut z;
-    bp.residual(a, x, rtrue);
-    cons.project(rtrue);
-    report(it, norm(rtrue) / scale, t0)
+    it
 }
 
 /// r ← r − α q, returns |r|².

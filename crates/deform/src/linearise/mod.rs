@@ -242,7 +242,9 @@ impl Linearisation<'_, '_> {
         let mut dc = vec![[0.0; 3]; n];
         let mut iterations = 0;
         for s in &self.steps {
-            let (dy, it) = s.forward(self.d, &dc, dw, self.rel_tol)?;
+            let (dy, it) = s
+                .forward(self.d, &dc, dw, self.rel_tol)
+                .map_err(|e| naming_seed(e, "input perturbation", "prescribed node", dw))?;
             dc = dy;
             iterations += it;
         }
@@ -284,7 +286,9 @@ impl Linearisation<'_, '_> {
             .steps
             .resize_with(self.steps.len(), StepAdjoint::default);
         for (s, st) in self.steps.iter().zip(start.steps.iter_mut()).rev() {
-            let (cbar, it) = s.reverse(self.d, &ybar, &mut wbar, self.rel_tol, st)?;
+            let (cbar, it) = s
+                .reverse(self.d, &ybar, &mut wbar, self.rel_tol, st)
+                .map_err(|e| naming_seed(e, "seed", "node", x_bar))?;
             ybar = cbar;
             iterations += it;
         }
@@ -302,5 +306,46 @@ fn check_len(got: usize, want: usize, what: &str) -> Result<()> {
         Err(Error::BadMotion {
             reason: format!("{got} {what} given; the linearisation has {want}"),
         })
+    }
+}
+
+/// A solve's [`Error::NoConvergence`] with the seed it was for named in `what`: its
+/// non-zero entries, the largest (entry `kind` k, component) and its norm, so that a failed
+/// product can be reproduced; other errors unchanged.
+fn naming_seed(e: Error, what: &str, kind: &str, seed: &[[f64; 3]]) -> Error {
+    let Error::NoConvergence {
+        what: system,
+        solver,
+        iterations,
+        residual,
+    } = e
+    else {
+        return e;
+    };
+    let mut nonzero = 0;
+    let mut largest = (0, 0, 0.0f64);
+    let mut sq = 0.0;
+    for (i, v) in seed.iter().enumerate() {
+        for (c, &x) in v.iter().enumerate() {
+            if x != 0.0 {
+                nonzero += 1;
+                sq += x * x;
+                if x.abs() > largest.2.abs() {
+                    largest = (i, c, x);
+                }
+            }
+        }
+    }
+    let (i, c, x) = largest;
+    Error::NoConvergence {
+        what: format!(
+            "{system} for the {what} with {nonzero} non-zero entries of {} (largest {x:e} at {kind} {i} {}, norm {:e})",
+            3 * seed.len(),
+            ["x", "y", "z"][c],
+            sq.sqrt()
+        ),
+        solver,
+        iterations,
+        residual,
     }
 }

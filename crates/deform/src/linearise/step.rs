@@ -409,7 +409,7 @@ impl Step {
                 })
                 .collect();
             let mut du = vec![[0.0; 3]; sys.node_of.len()];
-            let rep = op.solve_linear(
+            let rep = op.solve_linear_or_fallback(
                 &rhs,
                 &mut du,
                 &Constraints::default(),
@@ -458,7 +458,7 @@ impl Step {
             }
         }
         let mut x = vec![[0.0; 3]; sys.node_of.len()];
-        let rep = op.solve_linear(
+        let rep = op.solve_linear_or_fallback(
             &db,
             &mut x,
             &self.cons,
@@ -502,7 +502,7 @@ impl Step {
             let mut yu: Vec<V3> = sys.node_of.iter().map(|&i| ybar[i as usize]).collect();
             self.cons.project(&mut yu);
             let mut bbar = start_or_zero(std::mem::take(&mut start.eq21), nu);
-            let rep = op.solve_linear(
+            let rep = op.solve_linear_or_fallback(
                 &yu,
                 &mut bbar,
                 &self.cons,
@@ -580,7 +580,7 @@ impl Step {
                     })
                     .collect();
                 let mut z = start_or_zero(std::mem::take(&mut start.eq26), nu);
-                let rep = op.solve_linear(
+                let rep = op.solve_linear_or_fallback(
                     &ubar,
                     &mut z,
                     &Constraints::default(),
