@@ -23,6 +23,12 @@ exact products (:meth:`aeroshape.Study.linearise`, kept for the current inputs),
 :class:`FdComponent` is the same component with finite-difference partials instead, for
 comparison or for a case whose products fail.
 
+Failures: an :class:`aeroshape.EvaluationError` of an evaluation, a linearisation or a
+product (inverted cells, a failed model update or solve) is raised as
+``openmdao.api.AnalysisError``, so that drivers that handle it (pyOptSparse backtracks,
+``DOEDriver`` records the case as failed and goes on) treat the point as a failed analysis
+instead of stopping; the original error is its ``__cause__``.
+
 :func:`add_linear_constraints` adds the study's linear inequalities ``a @ x <= b`` to a
 group as one linear constraint with exact (constant) partials.
 """
@@ -35,6 +41,7 @@ from typing import Any
 import numpy as np
 import openmdao.api as om  # type: ignore[import-untyped]
 
+from ._errors import EvaluationError
 from ._native import Evaluation, Linearisation, Study
 
 __all__ = [
@@ -120,12 +127,26 @@ class _StudyComponent(om.ExplicitComponent):  # type: ignore[misc]
         study = self.study
         if not self.options["warm_start"]:
             study.forget_warm_start()
-        ev = study.evaluate(self.design_vector(inputs), allow_infeasible=True,
-                            allow_out_of_bounds=True)
+        x = self.design_vector(inputs)
+        try:
+            ev = study.evaluate(x, allow_infeasible=True, allow_out_of_bounds=True)
+        except EvaluationError as e:
+            raise _analysis_error(self, x, e) from e
         outputs[self.options["wall_output"]] = ev.wall_coordinates.ravel()
         if self.options["volume_output"] is not None:
             outputs[self.options["volume_output"]] = ev.volume_coordinates.ravel()
         self.last_evaluation = ev
+
+
+def _analysis_error(comp: om.ExplicitComponent, x: np.ndarray,
+                    e: EvaluationError) -> om.AnalysisError:
+    """The :class:`aeroshape.EvaluationError` of an evaluation, linearisation or product at
+    ``x`` as OpenMDAO's ``AnalysisError``, the signal on which drivers that can (pyOptSparse,
+    DOE, genetic) step back or record a failed case instead of stopping; the message names
+    the component, the design vector by name and the original error."""
+    names = getattr(comp, "_names", [])
+    vector = ", ".join(f"{n} = {v:.6g}" for n, v in zip(names, x))
+    return om.AnalysisError(f"{comp.pathname or 'aeroshape'}: {e} (at {vector})")
 
 
 class Component(_StudyComponent):
@@ -142,7 +163,11 @@ class Component(_StudyComponent):
         x = self.design_vector(inputs)
         if self._lin is None or not np.array_equal(self._lin.x, x):
             self._lin = None  # the old one is dropped before the new one is made
-            self._lin = self.study.linearise(x, allow_infeasible=True, allow_out_of_bounds=True)
+            try:
+                self._lin = self.study.linearise(x, allow_infeasible=True,
+                                                 allow_out_of_bounds=True)
+            except EvaluationError as e:
+                raise _analysis_error(self, x, e) from e
         return self._lin
 
     def compute_jacvec_product(self, inputs: Any, d_inputs: Any, d_outputs: Any,
@@ -155,7 +180,10 @@ class Component(_StudyComponent):
             if not outs or not dx.any():
                 return
             if vol_out in outs:
-                dvol = lin.jvp(dx)
+                try:
+                    dvol = lin.jvp(dx)
+                except EvaluationError as e:
+                    raise _analysis_error(self, lin.x, e) from e
                 d_outputs[vol_out] += dvol.ravel()
                 if wall_out in outs:
                     d_outputs[wall_out] += dvol[self.study.wall_nodes].ravel()
@@ -163,7 +191,10 @@ class Component(_StudyComponent):
                 d_outputs[wall_out] += lin.jvp(dx, wall=True).ravel()
         else:
             seeds = {o: np.asarray(d_outputs[o]).reshape(-1, 3) for o in outs}
-            grad = lin.vjp(seeds.get(vol_out), wall_bar=seeds.get(wall_out))
+            try:
+                grad = lin.vjp(seeds.get(vol_out), wall_bar=seeds.get(wall_out))
+            except EvaluationError as e:
+                raise _analysis_error(self, lin.x, e) from e
             for n, g in zip(self._names, grad):
                 if n in d_inputs:
                     d_inputs[n] += g
