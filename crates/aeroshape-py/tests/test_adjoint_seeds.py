@@ -89,9 +89,12 @@ def test_check_partials_volume_both_modes_default_case(tight):
     p = om.Problem(reports=False)
     p.model.add_subsystem("shape", comp, promotes_inputs=["*"])
     p.setup()
+    # Steps of 0.1 × scale, as the wall test of test_openmdao.py: at 0.01 × scale the
+    # thickness columns' differences carry the chain's round-off (measured: 4.7e-6 and
+    # 2.8e-6 absolute off the products, every other column and fwd against rev within 1e-6).
     for dv in study.design_variables:
         comp.set_check_partial_options(wrt=dv.name, method="fd", form="central",
-                                       step=0.01 * dv.scale, step_calc="abs")
+                                       step=0.1 * dv.scale, step_calc="abs")
     for name, val in zip(study.names, study.read_design_vector(DEFAULT / "dv.ron")):
         p.set_val(name, val)
     p.run_model()
