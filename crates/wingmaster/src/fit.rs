@@ -8,6 +8,12 @@
 //! at fixed σ_i, which gives the Jacobian; θ is updated by Levenberg–Marquardt (Marquardt's
 //! diagonal scaling), the feet are re-projected after every trial step. The camber ordinates
 //! enter linearly and are solved jointly with the nonlinear thickness parameters.
+//!
+//! Minimax rounds ([`FitOptions::minimax_rounds`]): the least-squares solution is then
+//! refined towards the smallest maximum distance by Lawson's iteratively reweighted least
+//! squares: the weighted cost Σ w_i d_i² is minimised by the same Levenberg–Marquardt steps
+//! (rows of the residual and the Jacobian scaled by √w_i), and between rounds
+//! w_i ← w_i |d_i| / mean_j(w_j |d_j|). The round with the smallest max |d_i| is kept.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -16,6 +22,9 @@ use crate::camber::{CamberLine, camber_knots, greville};
 use crate::error::{Error, Result};
 use crate::section::{Section, SectionParams};
 use crate::thickness::{N_NAMED, ThicknessParams, split_extra};
+
+/// Default [`FitOptions::minimax_rounds`], chosen by the UIUC survey (`docs/perf-log/2026-12-07-sections.md`).
+pub const DEFAULT_MINIMAX_ROUNDS: usize = 5;
 
 /// Options of [`fit`].
 #[derive(Debug, Clone, PartialEq)]
@@ -30,6 +39,11 @@ pub struct FitOptions {
     /// Convergence: stop after three consecutive accepted steps that each reduce the sum of
     /// squared normal distances by less than this fraction.
     pub tolerance: f64,
+    /// Rounds of Lawson's reweighting towards the minimax fit after the least-squares fit
+    /// (0: least squares only). Each round multiplies every point's weight by its distance
+    /// (normalised by the weighted mean) and refits from the previous solution; the round
+    /// with the smallest maximum distance is returned.
+    pub minimax_rounds: usize,
 }
 
 impl Default for FitOptions {
@@ -39,6 +53,7 @@ impl Default for FitOptions {
             thickness_extra: 0,
             max_iterations: 200,
             tolerance: 1e-4,
+            minimax_rounds: DEFAULT_MINIMAX_ROUNDS,
         }
     }
 }
@@ -53,6 +68,12 @@ impl FitOptions {
     /// Sets the convergence tolerance (relative decrease of the sum of squares).
     pub fn with_tolerance(mut self, tol: f64) -> Self {
         self.tolerance = tol;
+        self
+    }
+
+    /// Sets the number of minimax (Lawson) reweighting rounds; 0 gives the least-squares fit.
+    pub fn with_minimax_rounds(mut self, n: usize) -> Self {
+        self.minimax_rounds = n;
         self
     }
 
@@ -215,6 +236,26 @@ fn distance_from(e: &crate::section::SectionPoint, q: [f64; 2]) -> (f64, [f64; 2
     };
     let d = n[0] * (q[0] - e.p[0]) + n[1] * (q[1] - e.p[1]);
     (d, n)
+}
+
+/// |d_i| of every point from its foot `e` (local frame) on the placed section.
+fn abs_distances(sec: &Model, pts: &[[f64; 2]], evs: &[crate::section::SectionPoint]) -> Vec<f64> {
+    pts.iter()
+        .zip(evs)
+        .map(|(&q, e)| distance_from(&sec.mapped(*e), q).0.abs())
+        .collect()
+}
+
+/// Lawson's update of the minimax weights: w_i ← w_i |d_i| / mean_j(w_j |d_j|), floored
+/// at 1e-6 so that no point drops out of the fit.
+fn lawson_update(wts: &mut [f64], d: &[f64]) {
+    let mean = wts.iter().zip(d).map(|(w, d)| w * d).sum::<f64>() / wts.len() as f64;
+    if !(mean > 0.0 && mean.is_finite()) {
+        return;
+    }
+    for (w, d) in wts.iter_mut().zip(d) {
+        *w = (*w * d / mean).max(1e-6);
+    }
 }
 
 /// Projects q onto the section starting from σ0 (Gauss–Newton on (p − q)·p′ = 0, clamped
@@ -488,7 +529,17 @@ pub fn fit_normalised(na: &NormalisedAirfoil, name: &str, opts: &FitOptions) -> 
         Ok(fit_from(na, name, opts, Some(start))?.0)
     });
     match (direct, continued) {
-        (Ok(a), Ok(b)) => Ok(if b.rms_error < a.rms_error { b } else { a }),
+        (Ok(a), Ok(b)) => {
+            // The measure that the fit minimises: the maximum distance after minimax rounds.
+            let m = |f: &SectionFit| {
+                if opts.minimax_rounds > 0 {
+                    f.max_error
+                } else {
+                    f.rms_error
+                }
+            };
+            Ok(if m(&b) < m(&a) { b } else { a })
+        }
         (Ok(a), Err(_)) => Ok(a),
         (Err(_), Ok(b)) => Ok(b),
         (Err(e), Err(_)) => Err(e),
@@ -548,13 +599,18 @@ fn fit_from(
     // cost need no further evaluation.
     let mut evs: Vec<crate::section::SectionPoint> =
         sigma.iter().map(|&s| sec.sec.eval(s)).collect();
-    let eval_cost = |sec: &Model, evs: &[crate::section::SectionPoint]| -> f64 {
+    let mut wts = vec![1.0f64; npts];
+    let eval_cost = |sec: &Model, evs: &[crate::section::SectionPoint], wts: &[f64]| -> f64 {
         pts.iter()
             .zip(evs)
-            .map(|(&q, e)| distance_from(&sec.mapped(*e), q).0.powi(2))
+            .zip(wts)
+            .map(|((&q, e), w)| w * distance_from(&sec.mapped(*e), q).0.powi(2))
             .sum()
     };
-    let mut cost = eval_cost(&sec, &evs);
+    let mut cost = eval_cost(&sec, &evs, &wts);
+    // The best state over the reweighting rounds: (max |d_i|, θ, σ, feet).
+    type Snapshot = (f64, Vec<f64>, Vec<f64>, Vec<crate::section::SectionPoint>);
+    let mut best: Option<Snapshot> = None;
     let mut lambda = 1e-3;
     let mut nu = 2.0;
     let mut iterations = 0;
@@ -563,122 +619,154 @@ fn fit_from(
     let mut res = DVector::<f64>::zeros(npts);
     let nt = layout.n_thick;
     let camber_kv = kv;
-    for it in 0..opts.max_iterations {
-        iterations = it + 1;
-        // Jacobian at the current feet.
-        let (poly, pjac) = ThicknessParams::from_vec(&theta[..nt]).polygon_with_jacobian(true)?;
-        let tk = poly.knots();
-        let p = tk.degree();
-        let mut local = vec![0.0; p + 1];
-        let mut cb = vec![0.0; camber_kv.degree() + 1];
-        for (i, (&q, &e)) in pts.iter().zip(&evs).enumerate() {
-            let (d, n) = distance_from(&sec.mapped(e), q);
-            res[i] = d;
-            let x = e.p[0];
-            let (ma, mb) = sec.ab();
-            // Frame columns: ∂P/∂δx = (1 − px, −pz), ∂P/∂δz = (pz, 1 − px).
-            jac[(i, nd)] = -(n[0] * (1.0 - e.p[0]) - n[1] * e.p[1]);
-            jac[(i, nd + 1)] = -(n[0] * e.p[1] + n[1] * (1.0 - e.p[0]));
-            let n = [ma * n[0] + mb * n[1], -mb * n[0] + ma * n[1]];
-            let span = tk.basis_into(e.t, &mut local);
-            let c = sec.sec.camber_z(x);
-            let r = sec.sec.ramp(x);
-            for j in 0..nt {
-                let (mut dx, mut dz) = (0.0, 0.0);
-                for (a, b) in local.iter().enumerate() {
-                    let dp = pjac[span - p + a][j];
-                    dx += b * dp[0];
-                    dz += b * dp[1];
+    for round in 0..=opts.minimax_rounds {
+        if round > 0 {
+            let ds = abs_distances(&sec, pts, &evs);
+            lawson_update(&mut wts, &ds);
+            cost = eval_cost(&sec, &evs, &wts);
+            (lambda, nu, slow) = (1e-3, 2.0, 0);
+        }
+        for _ in 0..opts.max_iterations {
+            iterations += 1;
+            // Jacobian at the current feet.
+            let (poly, pjac) =
+                ThicknessParams::from_vec(&theta[..nt]).polygon_with_jacobian(true)?;
+            let tk = poly.knots();
+            let p = tk.degree();
+            let mut local = vec![0.0; p + 1];
+            let mut cb = vec![0.0; camber_kv.degree() + 1];
+            for (i, (&q, &e)) in pts.iter().zip(&evs).enumerate() {
+                let (d, n) = distance_from(&sec.mapped(e), q);
+                let sw = wts[i].sqrt();
+                res[i] = sw * d;
+                let x = e.p[0];
+                let (ma, mb) = sec.ab();
+                // Frame columns: ∂P/∂δx = (1 − px, −pz), ∂P/∂δz = (pz, 1 − px).
+                jac[(i, nd)] = -(n[0] * (1.0 - e.p[0]) - n[1] * e.p[1]);
+                jac[(i, nd + 1)] = -(n[0] * e.p[1] + n[1] * (1.0 - e.p[0]));
+                let n = [ma * n[0] + mb * n[1], -mb * n[0] + ma * n[1]];
+                let span = tk.basis_into(e.t, &mut local);
+                let c = sec.sec.camber_z(x);
+                let r = sec.sec.ramp(x);
+                for j in 0..nt {
+                    let (mut dx, mut dz) = (0.0, 0.0);
+                    for (a, b) in local.iter().enumerate() {
+                        let dp = pjac[span - p + a][j];
+                        dx += b * dp[0];
+                        dz += b * dp[1];
+                    }
+                    let mut dzs = dz + r[1] * dx;
+                    if j == 3 {
+                        dzs += r[2];
+                    }
+                    let pz = c[1] * dx + e.sign * dzs;
+                    jac[(i, j)] = -(n[0] * dx + n[1] * pz);
                 }
-                let mut dzs = dz + r[1] * dx;
-                if j == 3 {
-                    dzs += r[2];
+                if nd > nt {
+                    let cspan = camber_kv.basis_into(x.clamp(0.0, 1.0), &mut cb);
+                    let cp = camber_kv.degree();
+                    for j in nt..nd {
+                        jac[(i, j)] = 0.0;
+                    }
+                    for (a, b) in cb.iter().enumerate() {
+                        let l = cspan - cp + a;
+                        if l >= 1 && l + 1 < opts.camber_points {
+                            jac[(i, nt + l - 1)] = -n[1] * b;
+                        }
+                    }
                 }
-                let pz = c[1] * dx + e.sign * dzs;
-                jac[(i, j)] = -(n[0] * dx + n[1] * pz);
-            }
-            if nd > nt {
-                let cspan = camber_kv.basis_into(x.clamp(0.0, 1.0), &mut cb);
-                let cp = camber_kv.degree();
-                for j in nt..nd {
-                    jac[(i, j)] = 0.0;
-                }
-                for (a, b) in cb.iter().enumerate() {
-                    let l = cspan - cp + a;
-                    if l >= 1 && l + 1 < opts.camber_points {
-                        jac[(i, nt + l - 1)] = -n[1] * b;
+                if sw != 1.0 {
+                    for j in 0..np {
+                        jac[(i, j)] *= sw;
                     }
                 }
             }
-        }
-        // JᵀJ from the column dot products, upper triangle mirrored (half the work).
-        let mut a = DMatrix::<f64>::zeros(np, np);
-        for k in 0..np {
-            let ck = jac.column(k);
-            for l in k..np {
-                let v = ck.dot(&jac.column(l));
-                a[(k, l)] = v;
-                a[(l, k)] = v;
-            }
-        }
-        let g = jac.tr_mul(&res);
-        let dmax = (0..np).map(|k| a[(k, k)]).fold(0.0f64, f64::max);
-        let mut accepted = false;
-        while lambda < 1e12 {
-            let mut m = a.clone();
-            let mut dg = vec![0.0; np];
+            // JᵀJ from the column dot products, upper triangle mirrored (half the work).
+            let mut a = DMatrix::<f64>::zeros(np, np);
             for k in 0..np {
-                dg[k] = a[(k, k)].max(1e-12 * dmax);
-                m[(k, k)] += lambda * dg[k];
-            }
-            let Some(ch) = m.cholesky() else {
-                lambda *= 10.0;
-                continue;
-            };
-            let delta = ch.solve(&(-&g));
-            let trial: Vec<f64> = theta.iter().zip(delta.iter()).map(|(t, d)| t + d).collect();
-            let Ok(tsec) = build(&trial) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let (tsig, tevs): (Vec<f64>, Vec<crate::section::SectionPoint>) = pts
-                .iter()
-                .zip(&sigma)
-                .map(|(&q, &s)| project_eval(&tsec, q, s))
-                .unzip();
-            let tcost = eval_cost(&tsec, &tevs);
-            if tcost < cost {
-                let rel = (cost - tcost) / cost.max(1e-300);
-                // Gain ratio: actual decrease over the decrease of the linear model,
-                // L(0) − L(δ) = δᵀAδ + 2λ δᵀDδ (from (A + λD)δ = −g).
-                let ad = &a * &delta;
-                let pred = delta.dot(&ad)
-                    + 2.0 * lambda * (0..np).map(|k| dg[k] * delta[k] * delta[k]).sum::<f64>();
-                let rho = if pred > 0.0 {
-                    (cost - tcost) / pred
-                } else {
-                    0.0
-                };
-                theta = trial;
-                sec = tsec;
-                sigma = tsig;
-                evs = tevs;
-                cost = tcost;
-                // Nielsen's update of the damping.
-                lambda = (lambda * (1.0 / 3.0f64).max(1.0 - (2.0 * rho - 1.0).powi(3))).max(1e-9);
-                nu = 2.0;
-                accepted = true;
-                slow = if rel < opts.tolerance { slow + 1 } else { 0 };
-                if slow >= 3 {
-                    lambda = 1e12; // converged
+                let ck = jac.column(k);
+                for l in k..np {
+                    let v = ck.dot(&jac.column(l));
+                    a[(k, l)] = v;
+                    a[(l, k)] = v;
                 }
+            }
+            let g = jac.tr_mul(&res);
+            let dmax = (0..np).map(|k| a[(k, k)]).fold(0.0f64, f64::max);
+            let mut accepted = false;
+            while lambda < 1e12 {
+                let mut m = a.clone();
+                let mut dg = vec![0.0; np];
+                for k in 0..np {
+                    dg[k] = a[(k, k)].max(1e-12 * dmax);
+                    m[(k, k)] += lambda * dg[k];
+                }
+                let Some(ch) = m.cholesky() else {
+                    lambda *= 10.0;
+                    continue;
+                };
+                let delta = ch.solve(&(-&g));
+                let trial: Vec<f64> = theta.iter().zip(delta.iter()).map(|(t, d)| t + d).collect();
+                let Ok(tsec) = build(&trial) else {
+                    lambda *= 10.0;
+                    continue;
+                };
+                let (tsig, tevs): (Vec<f64>, Vec<crate::section::SectionPoint>) = pts
+                    .iter()
+                    .zip(&sigma)
+                    .map(|(&q, &s)| project_eval(&tsec, q, s))
+                    .unzip();
+                let tcost = eval_cost(&tsec, &tevs, &wts);
+                if tcost < cost {
+                    let rel = (cost - tcost) / cost.max(1e-300);
+                    // Gain ratio: actual decrease over the decrease of the linear model,
+                    // L(0) − L(δ) = δᵀAδ + 2λ δᵀDδ (from (A + λD)δ = −g).
+                    let ad = &a * &delta;
+                    let pred = delta.dot(&ad)
+                        + 2.0 * lambda * (0..np).map(|k| dg[k] * delta[k] * delta[k]).sum::<f64>();
+                    let rho = if pred > 0.0 {
+                        (cost - tcost) / pred
+                    } else {
+                        0.0
+                    };
+                    theta = trial;
+                    sec = tsec;
+                    sigma = tsig;
+                    evs = tevs;
+                    cost = tcost;
+                    // Nielsen's update of the damping.
+                    lambda =
+                        (lambda * (1.0 / 3.0f64).max(1.0 - (2.0 * rho - 1.0).powi(3))).max(1e-9);
+                    nu = 2.0;
+                    accepted = true;
+                    slow = if rel < opts.tolerance { slow + 1 } else { 0 };
+                    if slow >= 3 {
+                        lambda = 1e12; // converged
+                    }
+                    break;
+                }
+                lambda *= nu;
+                nu *= 2.0;
+            }
+            if !accepted || lambda >= 1e12 {
                 break;
             }
-            lambda *= nu;
-            nu *= 2.0;
         }
-        if !accepted || lambda >= 1e12 {
-            break;
+        let mx = abs_distances(&sec, pts, &evs)
+            .into_iter()
+            .fold(0.0, f64::max);
+        if best.as_ref().is_none_or(|b| mx < b.0) {
+            best = Some((mx, theta.clone(), sigma.clone(), evs.clone()));
+        }
+    }
+    // Keep the round with the smallest maximum distance.
+    if let Some((mx, t, sg, _)) = best {
+        let now = abs_distances(&sec, pts, &evs)
+            .into_iter()
+            .fold(0.0, f64::max);
+        if mx < now {
+            sec = build(&t)?;
+            (theta, sigma) = (t, sg);
         }
     }
     // The final frame: leading edge at δ, chord scaled by |(a, b)|, rotated by arg(a, b).

@@ -145,9 +145,12 @@ impl WingMasterSpec {
             find(&self.planform.dihedral, "planform dihedral")?,
             find(&self.planform.span, "planform span")?,
         ];
+        // Least squares (no minimax rounds), as before the rounds existed: the key sections
+        // are the surface's own exact samples, and the master only uses the fit's deviations.
         let opts = FitOptions::default()
             .with_camber_points(self.camber_points)
-            .with_thickness_extra(self.thickness_extra);
+            .with_thickness_extra(self.thickness_extra)
+            .with_minimax_rounds(0);
         let mut keys = Vec::with_capacity(self.key_sections.len());
         let mut prev_t = f64::NEG_INFINITY;
         for (k, ks) in self.key_sections.iter().enumerate() {

@@ -106,3 +106,30 @@ fn extra_thickness_points_are_reported() {
     assert_eq!(f.n_design_variables, 10 + 4 + 4);
     assert!(f.max_error < 1e-3, "max {}", f.max_error);
 }
+
+/// Held-out UIUC files (`tests/data/uiuc/`) that least squares at 16 design variables fits
+/// to worse than 1e-3 chord and the default minimax rounds fit within it; the minimax fit is
+/// never worse than least squares in the maximum distance (the best round is kept).
+#[test]
+fn minimax_rounds_meet_1e3_on_uiuc_files() {
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/uiuc");
+    for name in ["naca65210.dat", "e857.dat", "davis.dat", "goe504.dat"] {
+        let p = dir.join(name);
+        let file = std::fs::File::open(&p).unwrap();
+        let a = Airfoil::parse(std::io::BufReader::new(file), name).unwrap();
+        let lsq = fit(&a, &FitOptions::default().with_minimax_rounds(0)).unwrap();
+        let mm = fit(&a, &FitOptions::default()).unwrap();
+        assert_eq!(mm.n_design_variables, 16);
+        assert!(
+            lsq.max_error > 1e-3,
+            "{name}: least squares max {}",
+            lsq.max_error
+        );
+        assert!(mm.max_error <= 1e-3, "{name}: minimax max {}", mm.max_error);
+        let m1 = fit(&a, &FitOptions::default().with_minimax_rounds(1)).unwrap();
+        assert!(
+            m1.max_error <= lsq.max_error && mm.max_error <= m1.max_error,
+            "{name}"
+        );
+    }
+}
