@@ -242,8 +242,17 @@ def main():
     ap.add_argument("--out", type=Path, default=wingloop.ROOT / "docs" / "img")
     ap.add_argument("--prefix", default="optimisation")
     a = ap.parse_args()
-    summary = json.loads((a.work / "summary.json").read_text())
     evals, grads = history(a.work)
+    if (a.work / "summary.json").exists():
+        summary = json.loads((a.work / "summary.json").read_text())
+    else:  # a run stopped early: its first design and its last gradient point (an iterate)
+        first, last = evals[0], grads[-1]
+        names = wingloop.Loop.names_of(a.work)
+        summary = {"names": names,
+                   "initial": {k: first[k] for k in ("cd", "cl", "volume", "x", "alpha",
+                                                     "index")},
+                   "final": {k: last[k] for k in ("cd", "cl", "volume", "x", "alpha",
+                                                  "index")}}
     a.out.mkdir(parents=True, exist_ok=True)
     cases = a.work / "designs"
     w0 = Wing(cases / f"{summary['initial']['index']:03d}")

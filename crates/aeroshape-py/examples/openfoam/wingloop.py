@@ -129,6 +129,12 @@ class Loop:
         self.tris = self._wing_triangles()
         self.v0 = self.volume(xyz0)[0]
 
+    @staticmethod
+    def names_of(work: Path) -> list[str]:
+        """The design variables' names of the case in `work` (without building a study)."""
+        import aeroshape
+        return aeroshape.Study(str(Path(work) / "case" / "case.ron")).names
+
     # ------------------------------------------------------------ set-up
 
     def _base_case(self) -> None:
@@ -180,8 +186,10 @@ class Loop:
 
     # ------------------------------------------------------------ one design
 
-    def design(self, x: np.ndarray, alpha: float) -> Design:
-        """Grid and flow of (x, α); raises DesignError when either fails."""
+    def design(self, x: np.ndarray, alpha: float, warm: Design | None = None) -> Design:
+        """Grid and flow of (x, α); raises DesignError when either fails. With `warm`,
+        simpleFoam starts from that design's converged U and p (same topology, same
+        cells) instead of the uniform free stream: the finite-difference steps."""
         import aeroshape
         x = np.asarray(x, dtype=float).copy()
         self.count += 1
@@ -211,6 +219,10 @@ class Loop:
                 raise DesignError(f"design {idx}: checkMesh fails the grid: "
                                   f"{'; '.join(cm.failed)} ({cm.log})")
             fc.reset_fields(case, flow)
+            if warm is not None:
+                t = fc.latest_time(warm.case)
+                for name in ("U", "p"):
+                    shutil.copy(warm.case / t / name, case / "0" / name)
             p = fc.solve_primal(case, flow)
         except fc.FoamError as e:
             raise DesignError(f"design {idx}: {e}") from e
@@ -288,7 +300,7 @@ class Loop:
                 al += h
             else:
                 x[names.index(v)] += h
-            p = self.design(x, al)
+            p = self.design(x, al, warm=d)
             for key in ("cd", "cl"):
                 dj = (getattr(p, key) - getattr(d, key)) / h
                 if v == "alpha":
