@@ -187,9 +187,9 @@ class Loop:
     # ------------------------------------------------------------ one design
 
     def design(self, x: np.ndarray, alpha: float, warm: Design | None = None) -> Design:
-        """Grid and flow of (x, α); raises DesignError when either fails. With `warm`,
-        simpleFoam starts from that design's converged U and p (same topology, same
-        cells) instead of the uniform free stream: the finite-difference steps."""
+        """Grid and flow of (x, α); raises DesignError when either fails. With `warm`
+        (a design at the same α), simpleFoam starts from that design's converged U and p
+        (same topology, same cells) instead of the uniform free stream."""
         import aeroshape
         x = np.asarray(x, dtype=float).copy()
         self.count += 1
@@ -300,7 +300,9 @@ class Loop:
                 al += h
             else:
                 x[names.index(v)] += h
-            p = self.design(x, al, warm=d)
+            # warm start from d's fields only at d's α: the U file carries d's far-field
+            # velocity, which would override the new α's
+            p = self.design(x, al, warm=d if v != "alpha" else None)
             for key in ("cd", "cl"):
                 dj = (getattr(p, key) - getattr(d, key)) / h
                 if v == "alpha":
