@@ -30,9 +30,14 @@ pub struct ImportArgs {
     /// normals into the volume enclosed by the largest shell and away from the others).
     #[arg(long)]
     pub flip: bool,
-    /// Convert lengths to this unit (m, mm or in) [default: the file's unit].
+    /// Convert lengths to this unit (m, mm, cm, in or ft) [default: the file's unit].
     #[arg(long, value_name = "UNIT", value_parser = parse_unit)]
     pub units: Option<LengthUnit>,
+    /// The unit the file's numbers are in (m, mm, cm, in or ft), overriding the unit its
+    /// header declares (a header saying inches over numbers in metres) [default: the
+    /// file's].
+    #[arg(long, value_name = "UNIT", value_parser = parse_unit)]
+    pub file_units: Option<LengthUnit>,
     /// Roles given by hand (RON map face entity → role, e.g. `{"D31": "wing", "#17":
     /// "fuselage"}`), overriding the recognition by shape.
     #[arg(long, value_name = "FILE.ron")]
@@ -83,6 +88,7 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
         sew_tolerance: a.sew_tolerance,
         flip: a.flip,
         units: a.units.clone(),
+        file_units: a.file_units.clone(),
         ..ImportOptions::default()
     };
     let (db, report) = import_bytes(&bytes, &shown, &opts)?;
@@ -151,5 +157,5 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
 }
 
 fn parse_unit(s: &str) -> Result<LengthUnit, String> {
-    LengthUnit::named(s).ok_or_else(|| format!("unknown unit {s:?} (m, mm or in)"))
+    LengthUnit::named(s).ok_or_else(|| format!("unknown unit {s:?} (m, mm, cm, in or ft)"))
 }

@@ -16,6 +16,12 @@ use crate::surface::{Patch, SupportSurface};
 pub(crate) const CURVE_DEGREE: usize = 7;
 /// Degree (in u and in v) of approximating patches.
 pub(crate) const SURFACE_DEGREE: usize = 7;
+/// Highest degree converted exactly to the power basis. Above it the Bézier → power map
+/// (entries up to C(n, k) C(k, i), 3.3e8 at degree 22) loses digits to cancellation (a
+/// degree-22 B-spline came out 9.6e-6 off) and the control nodes of the database (Eq. 9) grow
+/// as (n + 1)²; such entities are re-approximated at [`CURVE_DEGREE`] / [`SURFACE_DEGREE`]
+/// from their own evaluation (de Boor, stable at any degree).
+pub(crate) const EXACT_MAX_DEGREE: usize = 11;
 /// Largest number of arcs per curve.
 const MAX_ARCS: usize = 4096;
 /// Largest number of patches per surface.
@@ -82,6 +88,47 @@ pub(crate) fn fit_curve(
         pieces: arcs,
         max_error,
     })
+}
+
+/// Sum of 8 chords of r on [a, b]: the length of a piece, to tell degenerate ones.
+pub(crate) fn chord_length(f: &dyn Fn(f64) -> Point3, a: f64, b: f64) -> f64 {
+    let pts: Vec<Point3> = (0..=8).map(|k| f(a + (b - a) * k as f64 / 8.0)).collect();
+    pts.windows(2).map(|w| (w[1] - w[0]).norm()).sum()
+}
+
+/// `breaks` (increasing) with every span whose length (`len(a, b)`) is at most `min_len`
+/// merged into a neighbour: its end break is dropped (its start break for the last span),
+/// so the span and the next are fitted as one. The first and last breaks are kept. Returns
+/// the breaks and the number of spans merged.
+pub(crate) fn merge_short_spans(
+    breaks: &[f64],
+    len: &dyn Fn(f64, f64) -> f64,
+    min_len: f64,
+) -> (Vec<f64>, usize) {
+    let n = breaks.len();
+    if n <= 2 {
+        return (breaks.to_vec(), 0);
+    }
+    let mut out = vec![breaks[0]];
+    let mut merged = 0;
+    for (k, &b) in breaks.iter().enumerate().skip(1) {
+        let a = *out.last().expect("first break");
+        let short = len(a, b) <= min_len;
+        if k + 1 < n {
+            if short {
+                merged += 1;
+            } else {
+                out.push(b);
+            }
+        } else {
+            if short && out.len() > 1 {
+                out.pop();
+                merged += 1;
+            }
+            out.push(b);
+        }
+    }
+    (out, merged)
 }
 
 /// Patches approximating r(u, v) and the source parameters of the patch grid lines.
@@ -224,6 +271,22 @@ mod tests {
             let p = fit.pieces[a].2.point(u);
             assert!((p.coords.norm() - 1.0).abs() < 2e-9);
         }
+    }
+
+    #[test]
+    fn short_spans_merge_into_their_neighbours() {
+        let len = |a: f64, b: f64| b - a;
+        let (b, n) = merge_short_spans(&[0.0, 0.3, 0.3 + 5e-7, 0.7, 1.0], &len, 1e-6);
+        assert_eq!((b, n), (vec![0.0, 0.3, 0.7, 1.0], 1));
+        // a short last span drops the break before it
+        let (b, n) = merge_short_spans(&[0.0, 0.5, 1.0 - 1e-9, 1.0], &len, 1e-6);
+        assert_eq!((b, n), (vec![0.0, 0.5, 1.0], 1));
+        // a short first span drops its end break
+        let (b, n) = merge_short_spans(&[0.0, 1e-7, 0.5, 1.0], &len, 1e-6);
+        assert_eq!((b, n), (vec![0.0, 0.5, 1.0], 1));
+        // nothing short: unchanged; a single span is never merged
+        assert_eq!(merge_short_spans(&[0.0, 0.5, 1.0], &len, 1e-6).1, 0);
+        assert_eq!(merge_short_spans(&[0.0, 1e-9], &len, 1e-6).0, vec![0.0, 1e-9]);
     }
 
     #[test]

@@ -14,7 +14,9 @@
 //!   support surfaces), edges, loops, corners, T-junctions, sewing, orientation, shells,
 //!   database — each documented in its file.
 //! * Units: the file's length unit is honoured and reported; [`ImportOptions::units`]
-//!   converts to another.
+//!   converts to another, [`ImportOptions::file_units`] overrides the declared one; a
+//!   model whose size does not fit its unit (an aircraft 36 "inches" long) gets a warning
+//!   with the evidence ([`size_warning`]).
 //! * Roles ([`recognise`], by shape): symmetry plane, far field, wing, wing tip, fuselage,
 //!   fuselage caps or body, naming each surface component `<role>.<entity>` (e.g.
 //!   `wing.D31`, `fuselage.#17`); [`ImportOptions::roles`] overrides them.
@@ -32,6 +34,7 @@ pub mod model;
 mod report;
 mod roles;
 pub mod stage;
+mod units;
 #[cfg(test)]
 mod tests;
 
@@ -41,6 +44,7 @@ pub use report::{
     EdgeReport, EntityConversion, FaceReport, ImportReport, JunctionReport, ShellReport,
 };
 pub use roles::{FaceRole, recognise};
+pub use units::{AIRCRAFT_LENGTH, ANY_LENGTH, size_warning};
 
 use crate::db::GeomDb;
 
@@ -132,6 +136,9 @@ pub struct ImportOptions {
     /// Convert lengths to this unit (`None`: keep the file's). A file that declares no
     /// unit cannot be converted.
     pub units: Option<LengthUnit>,
+    /// The unit the file's numbers are in, overriding the one it declares (a header that
+    /// says inches over numbers in metres); `None`: the file's own.
+    pub file_units: Option<LengthUnit>,
     /// Roles given by hand, overriding the recognition by shape ([`recognise`]): face
     /// entity (`D31`, `#17`, as in [`FaceReport::entity`]) → role name (`wing`,
     /// `fuselage`, `farfield`, …). The surface component is named `<role>.<entity>`; the
@@ -151,6 +158,7 @@ impl Default for ImportOptions {
             rel_sew_tolerance: 1e-6,
             flip: false,
             units: None,
+            file_units: None,
             roles: Default::default(),
             control_nodes: true,
         }
@@ -227,6 +235,16 @@ pub fn import_model(
     mut model: CadModel,
     opts: &ImportOptions,
 ) -> Result<(GeomDb, ImportReport), Error> {
+    if let Some(u) = &opts.file_units {
+        if model.unit.as_ref().is_some_and(|d| d.name != u.name) {
+            model.warnings.push(format!(
+                "the file declares {}; its numbers are read as {} (file units given)",
+                model.unit.as_ref().map_or("", |d| d.name.as_str()),
+                u.name
+            ));
+        }
+        model.unit = Some(u.clone());
+    }
     let (scale, units) = match (&opts.units, &model.unit) {
         (Some(t), Some(f)) => (f.metres / t.metres, Some(t.clone())),
         (Some(t), None) => {
@@ -265,5 +283,7 @@ pub fn import_model(
         junctions: Vec::new(),
         warnings: model.warnings.clone(),
     };
-    stage::run(&model, opts, report)
+    let (db, mut report) = stage::run(&model, opts, report)?;
+    units::check(&db, model.unit.as_ref(), &mut report);
+    Ok((db, report))
 }

@@ -10,8 +10,10 @@ pub struct EntityConversion {
     pub entity: String,
     /// Its type: `128`, `B_SPLINE_SURFACE_WITH_KNOTS`, ….
     pub kind: String,
-    /// `"exact"` (polynomial: Bézier extraction or exact coefficients) or `"fitted"`
-    /// (interpolated at the control nodes, refined until within the tolerance).
+    /// `"exact"` (polynomial: Bézier extraction or exact coefficients), `"fitted"` (not
+    /// polynomial: interpolated at the control nodes, refined until within the tolerance)
+    /// or `"reapproximated"` (polynomial, but its exact conversion is ill-conditioned: fitted
+    /// as a non-polynomial one, for the reason in `note`).
     pub method: &'static str,
     /// Arcs or patches produced.
     pub pieces: usize,
@@ -19,6 +21,11 @@ pub struct EntityConversion {
     /// sampled between the nodes of every arc (patch) as well as at them (round-off for an
     /// exact conversion).
     pub max_error: f64,
+    /// Why a polynomial entity was re-approximated (a degree above 11, knot spans shorter
+    /// than the sewing tolerance merged into their neighbours, an exact conversion off by
+    /// more than the tolerance), or `None`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
 
 /// One face of the import.
@@ -96,7 +103,8 @@ pub struct ImportReport {
     pub file: String,
     /// `IGES` or `STEP`.
     pub format: &'static str,
-    /// The length unit the file declares (`mm`, `m`, `in`, …), if it declares one.
+    /// The length unit of the file's numbers (`mm`, `m`, `in`, …): the one it declares, or
+    /// the one given to override it ([`ImportOptions::file_units`](super::ImportOptions::file_units)); `None` when neither.
     pub file_units: Option<String>,
     /// The length unit of the database (the file's, or the one asked for).
     pub units: Option<String>,

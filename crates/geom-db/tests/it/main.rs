@@ -6,6 +6,7 @@ mod control;
 mod convert;
 mod corrupt;
 mod fixtures;
+mod high_degree;
 mod ron_fuzz;
 mod validate;
 

@@ -8,11 +8,10 @@ use std::f64::consts::PI;
 use iges::{DeId, Entity};
 
 use super::Front;
-use crate::bspline::KnotVector;
 use crate::import::Error;
 use crate::import::model::{
-    Affine, AngleParam, ConicKind, Curve, Frame, NurbsCurve, NurbsSurface, Piece, Surface,
-    closure_tol,
+    Affine, AngleParam, ConicKind, Curve, Frame, Piece, Surface,
+    canonical_curve, canonical_surface, closure_tol,
 };
 use crate::prelude::{Matrix3, Point3, Vector3};
 
@@ -41,16 +40,6 @@ impl Front<'_> {
             .transform(id)
             .map_err(Error::Iges)?
             .map(|m| affine(&m)))
-    }
-
-    fn knots(
-        &self,
-        id: DeId,
-        degree: usize,
-        knots: &[f64],
-        what: &str,
-    ) -> Result<KnotVector, Error> {
-        KnotVector::new(degree, knots.to_vec()).map_err(|e| self.bad(id, format!("{what}: {e}")))
     }
 
     /// A 116 point (its own map applied).
@@ -177,10 +166,10 @@ impl Front<'_> {
                 )
             }
             Entity::BSplineCurve(b) => {
-                let kv = self.knots(id, b.degree, &b.knots, "knots")?;
                 let pts: Vec<Point3> = b.control_points.iter().map(|&p| p3(p)).collect();
-                let (d0, d1) = kv.domain();
-                let n = NurbsCurve::new(kv, &pts, &b.weights).map_err(|e| self.bad(id, e))?;
+                let n = canonical_curve(b.degree, &b.knots, &pts, &b.weights)
+                    .map_err(|e| self.bad(id, e))?;
+                let (d0, d1) = n.domain();
                 let range = (b.range[0].max(d0), b.range[1].min(d1));
                 if !(range.1 > range.0) {
                     return Err(self.bad(
@@ -426,11 +415,14 @@ impl Front<'_> {
                 }
             }
             Entity::BSplineSurface(b) => {
-                let ku = self.knots(id, b.degree_u, &b.knots_u, "u knots")?;
-                let kv = self.knots(id, b.degree_v, &b.knots_v, "v knots")?;
                 let pts: Vec<Point3> = b.control_points.iter().map(|&p| p3(p)).collect();
-                let mut n =
-                    NurbsSurface::new(ku, kv, &pts, &b.weights).map_err(|e| self.bad(id, e))?;
+                let mut n = canonical_surface(
+                    (b.degree_u, &b.knots_u),
+                    (b.degree_v, &b.knots_v),
+                    &pts,
+                    &b.weights,
+                )
+                .map_err(|e| self.bad(id, e))?;
                 n.closed_u =
                     (b.closed_u || b.periodic_u) && n.meets_itself(true, closure_tol(&pts));
                 n.closed_v =

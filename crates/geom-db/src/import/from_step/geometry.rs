@@ -6,10 +6,10 @@ use std::f64::consts::PI;
 use step::{ConicKind as StepConic, ElementaryKind, Entity, Id, Trim};
 
 use super::Front;
-use crate::bspline::KnotVector;
 use crate::import::Error;
 use crate::import::model::{
-    AngleParam, ConicKind, Curve, Frame, NurbsCurve, NurbsSurface, Piece, Surface, closure_tol,
+    AngleParam, ConicKind, Curve, Frame, Piece, Surface, canonical_curve, canonical_surface,
+    closure_tol,
 };
 use crate::prelude::{Point3, Vector3};
 
@@ -123,15 +123,14 @@ impl Front<'_> {
                 (Curve::Polyline { points }, Some((0.0, (n - 1) as f64)))
             }
             Entity::BSplineCurve(b) => {
-                let kv = KnotVector::new(b.degree, expand(&b.knots, &b.multiplicities))
-                    .map_err(|e| self.bad(id, format!("knots: {e}")))?;
                 let pts = b
                     .control_points
                     .iter()
                     .map(|&q| self.p(id, q))
                     .collect::<Result<Vec<_>, _>>()?;
                 let w = b.weights.clone().unwrap_or_else(|| vec![1.0; pts.len()]);
-                let n = NurbsCurve::new(kv, &pts, &w).map_err(|e| self.bad(id, e))?;
+                let knots = expand(&b.knots, &b.multiplicities);
+                let n = canonical_curve(b.degree, &knots, &pts, &w).map_err(|e| self.bad(id, e))?;
                 let d = n.domain();
                 (Curve::Nurbs(n), Some(d))
             }
@@ -304,10 +303,8 @@ impl Front<'_> {
                 }
             }
             Entity::BSplineSurface(b) => {
-                let ku = KnotVector::new(b.u_degree, expand(&b.u_knots, &b.u_multiplicities))
-                    .map_err(|e| self.bad(id, format!("u knots: {e}")))?;
-                let kv = KnotVector::new(b.v_degree, expand(&b.v_knots, &b.v_multiplicities))
-                    .map_err(|e| self.bad(id, format!("v knots: {e}")))?;
+                let ku = expand(&b.u_knots, &b.u_multiplicities);
+                let kv = expand(&b.v_knots, &b.v_multiplicities);
                 let nu = b.control_points.len();
                 let nv = b.control_points.first().map_or(0, Vec::len);
                 let mut pts = vec![Point3::origin(); nu * nv];
@@ -320,7 +317,9 @@ impl Front<'_> {
                         }
                     }
                 }
-                let mut n = NurbsSurface::new(ku, kv, &pts, &w).map_err(|e| self.bad(id, e))?;
+                let mut n =
+                    canonical_surface((b.u_degree, &ku), (b.v_degree, &kv), &pts, &w)
+                        .map_err(|e| self.bad(id, e))?;
                 n.closed_u = b.u_closed != Some(false) && n.meets_itself(true, closure_tol(&pts));
                 n.closed_v = b.v_closed != Some(false) && n.meets_itself(false, closure_tol(&pts));
                 Surface::Nurbs(n)

@@ -338,7 +338,28 @@ impl Front<'_> {
                     (ta, tb) = (hi, lo);
                 }
             }
-            None => {}
+            None => {
+                // A vertex at the joint of a closed non-periodic curve (a wing section's
+                // trailing edge, where the edges of the upper and lower sides start and end)
+                // is at both ends of its range: the edge runs from the start along the curve
+                // (same_sense) or against it.
+                if let Some((lo, hi)) = range {
+                    let (pl, ph) = (curve.point(lo), curve.point(hi));
+                    let extent = (0..=8)
+                        .map(|k| (curve.point(lo + (hi - lo) * k as f64 / 8.0) - pl).norm())
+                        .fold(0.0, f64::max);
+                    let near = 1e-7 * extent;
+                    let at_both = |p: &crate::prelude::Point3| {
+                        (pl - p).norm() <= near && (ph - p).norm() <= near
+                    };
+                    if at_both(&a) {
+                        ta = if ec.same_sense { lo } else { hi };
+                    }
+                    if at_both(&b) {
+                        tb = if ec.same_sense { hi } else { lo };
+                    }
+                }
+            }
         }
         // pcurves of this edge on the face's surface (for the trimming box).
         let mut uv = Vec::new();

@@ -15,7 +15,7 @@ mod surface;
 
 pub use curve::{ConicKind, Curve, Piece};
 pub use frame::{Affine, Frame};
-pub(crate) use nurbs::closure_tol;
+pub(crate) use nurbs::{canonical_curve, canonical_surface, closure_tol};
 pub use nurbs::{NurbsCurve, NurbsSurface};
 pub use surface::{AngleParam, Domain, Surface};
 

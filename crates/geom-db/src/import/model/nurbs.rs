@@ -63,6 +63,111 @@ pub(crate) fn weights_rational(w: impl Iterator<Item = f64>) -> Result<bool, Str
     Ok(hi - lo > EQUAL_WEIGHTS * hi)
 }
 
+/// Knot values closer than this fraction of the knot domain's width are one value (a
+/// writer's round-off: `0.3333333333` and `0.33333333330001`).
+pub(crate) const SAME_KNOT: f64 = 1e-13;
+
+/// A knot vector as a file gives it, made canonical: knot values within [`SAME_KNOT`] of
+/// the domain's width snapped to the first of them, and every basis function that is
+/// identically zero (t_i = t_{i+p+1}: a knot repeated more than p + 1 times, at an end or
+/// inside, as when a value is listed twice with its multiplicity split) removed with its
+/// control point, which changes nothing on the domain. Returns the knots and the indices
+/// of the control points kept; `Err` for what no reading can mend (too few knots, not
+/// finite, decreasing). An empty domain is left to [`KnotVector::new`] to refuse.
+pub(crate) fn canonical_knots(
+    degree: usize,
+    knots: &[f64],
+) -> crate::error::Result<(Vec<f64>, Vec<usize>)> {
+    let bad = |reason: String| crate::error::Error::InvalidKnots { degree, reason };
+    if let Some(i) = knots.iter().position(|k| !k.is_finite()) {
+        return Err(bad(format!("knot {i} is not finite")));
+    }
+    if let Some(i) = knots.windows(2).position(|w| w[1] < w[0]) {
+        return Err(bad(format!("knots decrease at index {}", i + 1)));
+    }
+    let n = knots.len();
+    if n < 2 * (degree + 1) {
+        return Err(bad(format!(
+            "{n} knots given, at least {} needed",
+            2 * (degree + 1)
+        )));
+    }
+    let width = (knots[n - degree - 1] - knots[degree]).abs();
+    let snap = SAME_KNOT * width;
+    let mut k = knots.to_vec();
+    for i in 1..n {
+        if k[i] - k[i - 1] <= snap {
+            k[i] = k[i - 1];
+        }
+    }
+    let mut keep: Vec<usize> = (0..n - degree - 1).collect();
+    // drop zero basis functions: N_i vanishes when t_i = t_{i+p+1}
+    let mut i = 0;
+    while i + degree + 1 < k.len() {
+        if k[i] == k[i + degree + 1] {
+            k.remove(i);
+            keep.remove(i);
+        } else {
+            i += 1;
+        }
+    }
+    Ok((k, keep))
+}
+
+/// A curve from a file's knots (any, see [`canonical_knots`]), points and weights.
+pub(crate) fn canonical_curve(
+    degree: usize,
+    knots: &[f64],
+    points: &[Point3],
+    weights: &[f64],
+) -> Result<NurbsCurve, String> {
+    let n = knots.len().saturating_sub(degree + 1);
+    if points.len() != n || weights.len() != n {
+        return Err(format!(
+            "{} control points and {} weights for {n} basis functions",
+            points.len(),
+            weights.len()
+        ));
+    }
+    let (k, keep) = canonical_knots(degree, knots).map_err(|e| format!("knots: {e}"))?;
+    let kv = KnotVector::new(degree, k).map_err(|e| format!("knots: {e}"))?;
+    let pts: Vec<Point3> = keep.iter().map(|&i| points[i]).collect();
+    let w: Vec<f64> = keep.iter().map(|&i| weights[i]).collect();
+    NurbsCurve::new(kv, &pts, &w)
+}
+
+/// A surface from a file's knots (any, see [`canonical_knots`]), points and weights
+/// (`[i + n_u j]`, n_u the number of the file's u basis functions).
+pub(crate) fn canonical_surface(
+    (degree_u, knots_u): (usize, &[f64]),
+    (degree_v, knots_v): (usize, &[f64]),
+    points: &[Point3],
+    weights: &[f64],
+) -> Result<NurbsSurface, String> {
+    let nu = knots_u.len().saturating_sub(degree_u + 1);
+    let nv = knots_v.len().saturating_sub(degree_v + 1);
+    if points.len() != nu * nv || weights.len() != nu * nv {
+        return Err(format!(
+            "{} control points and {} weights for {nu} × {nv} basis functions",
+            points.len(),
+            weights.len()
+        ));
+    }
+    let (ku, keep_u) = canonical_knots(degree_u, knots_u).map_err(|e| format!("u knots: {e}"))?;
+    let (kv, keep_v) = canonical_knots(degree_v, knots_v).map_err(|e| format!("v knots: {e}"))?;
+    let ku = KnotVector::new(degree_u, ku).map_err(|e| format!("u knots: {e}"))?;
+    let kv = KnotVector::new(degree_v, kv).map_err(|e| format!("v knots: {e}"))?;
+    let mut pts = Vec::with_capacity(keep_u.len() * keep_v.len());
+    let mut w = Vec::with_capacity(pts.capacity());
+    for &j in &keep_v {
+        for &i in &keep_u {
+            pts.push(points[i + nu * j]);
+            w.push(weights[i + nu * j]);
+        }
+    }
+    NurbsSurface::new(ku, kv, &pts, &w)
+}
+
 fn homogeneous(p: Point3, w: f64) -> [f64; 4] {
     [p.x * w, p.y * w, p.z * w, w]
 }
@@ -279,6 +384,33 @@ fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f64], &mut [f64]) -> R) -> R
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn knots_repeated_beyond_the_order_lose_their_zero_basis_functions() {
+        // degree 1, the end knot 0 three times: N_0 is zero
+        let (k, keep) = canonical_knots(1, &[0.0, 0.0, 0.0, 1.0, 1.0]).unwrap();
+        assert_eq!((k, keep), (vec![0.0, 0.0, 1.0, 1.0], vec![1, 2]));
+        // degree 2, an inner knot four times (listed twice, multiplicities 2 + 2)
+        let (k, keep) = canonical_knots(2, &[0., 0., 0., 0.5, 0.5, 0.5, 0.5, 1., 1., 1.]).unwrap();
+        assert_eq!(k, vec![0., 0., 0., 0.5, 0.5, 0.5, 1., 1., 1.]);
+        assert_eq!(keep, vec![0, 1, 2, 4, 5, 6]);
+        // round-off between equal knots is removed
+        let (k, _) = canonical_knots(1, &[0.0, 0.0, 0.5, 0.5 + 1e-16, 1.0, 1.0]).unwrap();
+        assert_eq!(k[2], k[3]);
+        // the same curve: evaluate both ways
+        let pts: Vec<Point3> = (0..7).map(|i| Point3::new(i as f64, (i * i) as f64, 0.0)).collect();
+        let raw = [0., 0., 0., 0.5, 0.5, 0.5, 0.5, 1., 1., 1.];
+        let c = canonical_curve(2, &raw, &pts, &[1.0; 7]).unwrap();
+        let kept: Vec<Point3> = keep.iter().map(|&i| pts[i]).collect();
+        let kv = KnotVector::new(2, k.clone()).unwrap_or_else(|_| {
+            KnotVector::new(2, vec![0., 0., 0., 0.5, 0.5, 0.5, 1., 1., 1.]).unwrap()
+        });
+        let d = NurbsCurve::new(kv, &kept, &[1.0; 6]).unwrap();
+        for t in [0.0, 0.2, 0.49, 0.51, 0.9, 1.0] {
+            assert!((c.point(t) - d.point(t)).norm() < 1e-15);
+        }
+        assert!(canonical_knots(1, &[0.0, 1.0, 0.5, 1.0]).is_err());
+    }
 
     /// The rational quadratic quarter circle: C(t) on the unit circle, C′ by differences.
     #[test]

@@ -6,7 +6,7 @@
 
 use std::collections::HashMap;
 
-use super::super::approx::fit_curve;
+use super::super::approx::{EXACT_MAX_DEGREE, chord_length, fit_curve, merge_short_spans};
 use super::super::model::{CadModel, Source};
 use super::super::{EntityConversion, Error};
 use super::faces::Faces;
@@ -84,7 +84,7 @@ pub(crate) fn run(model: &CadModel, faces: &Faces) -> Result<Edges, Error> {
                         let arcs = match cache.get(&key) {
                             Some(a) => a.clone(),
                             None => {
-                                let (arcs, conv) = convert(model, u.curve, lo, hi, tol)?;
+                                let (arcs, conv) = convert(model, u.curve, lo, hi, (tol, sew))?;
                                 conversions.push(conv);
                                 cache.insert(key, arcs.clone());
                                 arcs
@@ -145,12 +145,20 @@ pub(crate) fn run(model: &CadModel, faces: &Faces) -> Result<Edges, Error> {
 
 /// The arcs of a curve on [lo, hi], with the conversion's report (the error sampled at 8
 /// points per arc between and at the nodes, against the exact curve).
+///
+/// A polynomial curve is converted exactly unless that is ill-conditioned: a degree above
+/// [`EXACT_MAX_DEGREE`], a knot span no longer than the sewing tolerance (it would be a
+/// degenerate arc), or exact arcs off by more than the tolerance. Then, as a curve that is
+/// not polynomial, it is interpolated at the control nodes of degree-7 arcs from its own
+/// evaluation, over its knot spans with the short ones merged into their neighbours, and
+/// its report says why (`note`). A curve that cannot be fitted within the tolerance fails
+/// naming the entity and the `--tolerance` that would let it pass.
 fn convert(
     model: &CadModel,
     ci: usize,
     lo: f64,
     hi: f64,
-    tol: f64,
+    (tol, sew): (f64, f64),
 ) -> Result<(Vec<Arc>, EntityConversion), Error> {
     let mc = &model.curves[ci];
     let c = &mc.curve;
@@ -164,37 +172,76 @@ fn convert(
             "the curve's parameter range [{lo}, {hi}] is empty or infinite"
         )));
     }
-    // Each arc with the source interval it covers; the error is sampled at 8 points of
-    // every arc (between and at the nodes) against the source at the same parameter.
-    let (pieces, method, mut err) = match c.exact_arcs(lo, hi) {
-        Some(p) => (p, "exact", 0.0f64),
+    let f = |t: f64| c.point(t);
+    // The error of arcs against the curve at 9 points of each (between and at the nodes).
+    let sampled = |pieces: &[(f64, f64, Arc)]| {
+        let mut err: f64 = 0.0;
+        for (a, b, arc) in pieces {
+            for k in 0..=8 {
+                let s = k as f64 / 8.0;
+                let d = (arc.point(s) - c.point(a + s * (b - a))).norm();
+                err = if d.is_nan() {
+                    f64::INFINITY
+                } else {
+                    err.max(d)
+                };
+            }
+        }
+        err
+    };
+    let mut note = None;
+    let exact = c.exact_arcs(lo, hi).filter(|p| !p.is_empty()).and_then(|p| {
+        let degree = p.iter().map(|x| x.2.degree).max().unwrap_or(0);
+        let short = p
+            .iter()
+            .filter(|(a, b, _)| chord_length(&f, *a, *b) <= sew)
+            .count();
+        let err = sampled(&p);
+        let why = if degree > EXACT_MAX_DEGREE {
+            format!("degree {degree} above {EXACT_MAX_DEGREE}")
+        } else if short > 0 {
+            format!("{short} knot spans no longer than the sewing tolerance {sew:.3e}")
+        } else if !(err <= tol) {
+            format!("its exact arcs are {err:.3e} off (round-off), above the tolerance")
+        } else {
+            return Some((p, err));
+        };
+        note = Some(why);
+        None
+    });
+    let (pieces, method, mut err) = match exact {
+        Some((p, err)) => (p, "exact", err),
         None => {
-            let f = |t: f64| c.point(t);
-            let fit = fit_curve(&f, &c.breaks(lo, hi), tol).map_err(|e| {
+            let (breaks, merged) = merge_short_spans(
+                &c.breaks(lo, hi),
+                &|a, b| chord_length(&f, a, b),
+                sew,
+            );
+            if merged > 0 {
+                let m = format!("{merged} knot spans shorter than {sew:.3e} merged");
+                note = Some(match note {
+                    Some(n) => format!("{n}; {m}"),
+                    None => m,
+                });
+            }
+            let fit = fit_curve(&f, &breaks, tol).map_err(|e| {
                 bad(format!(
-                    "cannot approximate within {tol:.3e} (best error {e:.3e})"
+                    "cannot approximate within {tol:.3e} (best error {e:.3e}); --tolerance {} would let it pass",
+                    suggest_tolerance(e)
                 ))
             })?;
-            (fit.pieces, "fitted", fit.max_error)
+            let method = if note.is_some() {
+                "reapproximated"
+            } else {
+                "fitted"
+            };
+            (fit.pieces, method, fit.max_error)
         }
     };
-    if pieces.is_empty() {
-        return Err(bad("the curve has an empty parameter range".into()));
-    }
-    for (a, b, arc) in &pieces {
-        for k in 0..=8 {
-            let s = k as f64 / 8.0;
-            let d = (arc.point(s) - c.point(a + s * (b - a))).norm();
-            err = if d.is_nan() {
-                f64::INFINITY
-            } else {
-                err.max(d)
-            };
-        }
-    }
-    if !err.is_finite() || (method == "exact" && err > tol) {
-        // Exact arcs cannot be off, nor fitted ones infinitely, but for a corrupt entity
-        // (an overflowing coordinate, a NaN weight).
+    err = err.max(sampled(&pieces));
+    if !err.is_finite() {
+        // Fitted arcs cannot be infinitely off but for a corrupt entity (an overflowing
+        // coordinate, a NaN weight).
         return Err(bad(format!(
             "its {method} arcs are {err:.3e} from the curve (tolerance {tol:.3e})"
         )));
@@ -208,6 +255,30 @@ fn convert(
             method,
             pieces: arcs.len(),
             max_error: err,
+            note,
         },
     ))
+}
+
+/// A tolerance that would accept a fit whose best error was `e`: 2 e rounded up to two
+/// significant digits.
+pub(crate) fn suggest_tolerance(e: f64) -> String {
+    if !e.is_finite() {
+        return "(none: the entity does not evaluate)".into();
+    }
+    let x = 2.0 * e.max(f64::MIN_POSITIVE);
+    let exp = x.log10().floor() as i32;
+    let d = (x / 10f64.powi(exp - 1)).ceil() as i64; // 10..=100
+    let (d, exp) = if d >= 100 { (10, exp + 1) } else { (d, exp) };
+    format!("{}.{}e{exp}", d / 10, d % 10)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn suggested_tolerances_are_above_twice_the_error() {
+        assert_eq!(super::suggest_tolerance(1.234e-6), "2.5e-6");
+        assert_eq!(super::suggest_tolerance(4.99e-3), "1.0e-2");
+        assert_eq!(super::suggest_tolerance(5.01e-7), "1.1e-6");
+    }
 }

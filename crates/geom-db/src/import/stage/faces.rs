@@ -22,7 +22,7 @@
 
 use std::collections::HashMap;
 
-use super::super::approx::fit_surface;
+use super::super::approx::{EXACT_MAX_DEGREE, chord_length, fit_surface, merge_short_spans};
 use super::super::model::{CadModel, Domain, Surface};
 use super::params::{invert, unwrap};
 
@@ -380,7 +380,7 @@ pub(crate) fn run(model: &CadModel, opts: &ImportOptions) -> Result<Faces, Error
         let k = match key_of.get(&key) {
             Some(&k) => k,
             None => {
-                let (sup, conv) = convert(model, fi, &d, b, raw, tol)?;
+                let (sup, conv) = convert(model, fi, &d, b, raw, (tol, sew))?;
                 supports.push(sup);
                 conversions.push(conv);
                 key_of.insert(key, supports.len() - 1);
@@ -438,24 +438,51 @@ fn sampled_error(s: &Surface, sup: &Support) -> f64 {
 }
 
 /// The support surface of face `fi` over its box.
+///
+/// A polynomial surface is converted exactly unless that is ill-conditioned (a degree above
+/// [`EXACT_MAX_DEGREE`], a knot span no wider than the sewing tolerance inside the face, or
+/// exact patches off by more than the tolerance); then, like a surface that is not
+/// polynomial, it is interpolated at the control nodes of degree-7 patches from its own
+/// evaluation, over its knot spans with the narrow ones merged, and its report says why.
 fn convert(
     model: &CadModel,
     fi: usize,
     d: &Domain,
     b: Rect,
     raw: Rect,
-    tol: f64,
+    (tol, sew): (f64, f64),
 ) -> Result<(Support, EntityConversion), Error> {
     let ms = &model.surfaces[model.faces[fi].surface];
     let s = &ms.surface;
     let (ur, vr) = b;
-    let conv = |method: &'static str, pieces: usize, max_error: f64| EntityConversion {
-        entity: ms.source.label.clone(),
-        kind: ms.source.kind.clone(),
-        method,
-        pieces,
-        max_error,
+    let conv = |method: &'static str, pieces: usize, max_error: f64, note: Option<String>| {
+        EntityConversion {
+            entity: ms.source.label.clone(),
+            kind: ms.source.kind.clone(),
+            method,
+            pieces,
+            max_error,
+            note,
+        }
     };
+    // The widths of the spans between breaks along u (at 5 v across the box) and along v.
+    let width_u = |a: f64, c: f64| {
+        (0..=4)
+            .map(|k| {
+                let v = vr.0 + (vr.1 - vr.0) * k as f64 / 4.0;
+                chord_length(&|u| s.point(u, v), a, c)
+            })
+            .fold(0.0, f64::max)
+    };
+    let width_v = |a: f64, c: f64| {
+        (0..=4)
+            .map(|k| {
+                let u = ur.0 + (ur.1 - ur.0) * k as f64 / 4.0;
+                chord_length(&|v| s.point(u, v), a, c)
+            })
+            .fold(0.0, f64::max)
+    };
+    let mut note = None;
     if let Some((full, ub, vb)) = s.exact_patches(ur, vr) {
         // Keep the spans that overlap the box by more than round-off (drops sliver spans
         // outside the face).
@@ -484,21 +511,30 @@ fn convert(
             u_breaks: ub[i0..=i1].to_vec(),
             v_breaks: vb[j0..=j1].to_vec(),
         };
+        let degree = sup
+            .surface
+            .patches
+            .iter()
+            .map(|p| p.deg_u.max(p.deg_v))
+            .max()
+            .unwrap_or(0);
+        let short = sup.u_breaks.windows(2).filter(|w| width_u(w[0], w[1]) <= sew).count()
+            + sup.v_breaks.windows(2).filter(|w| width_v(w[0], w[1]) <= sew).count();
         let err = sampled_error(s, &sup);
-        if !(err <= tol) {
-            // An exact conversion cannot be off but for a corrupt entity (an overflowing
-            // coordinate, a NaN weight).
-            return Err(face_err(
-                model,
-                fi,
-                format!(
-                    "surface {}: its exact patches are {err:.3e} from it (tolerance {tol:.3e})",
-                    ms.source.describe()
-                ),
+        if degree > EXACT_MAX_DEGREE {
+            note = Some(format!("degree {degree} above {EXACT_MAX_DEGREE}"));
+        } else if short > 0 {
+            note = Some(format!(
+                "{short} knot spans no wider than the sewing tolerance {sew:.3e}"
             ));
+        } else if !(err <= tol) {
+            note = Some(format!(
+                "its exact patches are {err:.3e} off (round-off), above the tolerance"
+            ));
+        } else {
+            let c = conv("exact", sup.surface.patches.len(), err, None);
+            return Ok((sup, c));
         }
-        let c = conv("exact", sup.surface.patches.len(), err);
-        return Ok((sup, c));
     }
     let (bu, bv) = s.breaks();
     let inside = |br: Vec<f64>, (a, c): (f64, f64), period: Option<f64>| {
@@ -518,20 +554,24 @@ fn convert(
         out.push(c);
         out
     };
+    let (ub, mu) = merge_short_spans(&inside(bu, ur, d.u_period), &width_u, sew);
+    let (vb, mv) = merge_short_spans(&inside(bv, vr, d.v_period), &width_v, sew);
+    if mu + mv > 0 {
+        let m = format!("{} knot spans narrower than {sew:.3e} merged", mu + mv);
+        note = Some(match note {
+            Some(n) => format!("{n}; {m}"),
+            None => m,
+        });
+    }
     let f = |u: f64, v: f64| s.point(u, v);
-    let fit = fit_surface(
-        &f,
-        &inside(bu, ur, d.u_period),
-        &inside(bv, vr, d.v_period),
-        tol,
-    )
-    .map_err(|e| {
+    let fit = fit_surface(&f, &ub, &vb, tol).map_err(|e| {
         face_err(
             model,
             fi,
             format!(
-                "cannot approximate surface {} within {tol:.3e} (best error {e:.3e})",
-                ms.source.describe()
+                "cannot approximate surface {} within {tol:.3e} (best error {e:.3e}); --tolerance {} would let it pass",
+                ms.source.describe(),
+                super::edges::suggest_tolerance(e)
             ),
         )
     })?;
@@ -541,6 +581,11 @@ fn convert(
         v_breaks: fit.v_breaks,
         surface: fit.surface,
     };
-    let c = conv("fitted", sup.surface.patches.len(), fit.max_error);
+    let method = if note.is_some() {
+        "reapproximated"
+    } else {
+        "fitted"
+    };
+    let c = conv(method, sup.surface.patches.len(), fit.max_error, note);
     Ok((sup, c))
 }

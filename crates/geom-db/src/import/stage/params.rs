@@ -261,7 +261,22 @@ pub(crate) fn exact_loop(
             let (mut u, mut v) = invert(s, d, &run[j], from);
             let (_, su, sv) = s.derivs(u, v);
             let (nu, nv) = (su.norm(), sv.norm());
-            poles[j] = (nu <= 1e-6 * nv, nv <= 1e-6 * nu);
+            // A pole: a vanishing derivative, or an iso-line through the sample of (nearly)
+            // no length (the tip of a lens cap over a round leading edge, where S_u vanishes
+            // too at mid-v: the tangents of both halves cancel).
+            let iso = |along_u: bool| {
+                let (a, b) = if along_u { trim.0 } else { trim.1 };
+                let at = |k: usize| {
+                    let t = a + (b - a) * k as f64 / 8.0;
+                    if along_u { s.point(t, v) } else { s.point(u, t) }
+                };
+                (0..8).map(|k| (at(k + 1) - at(k)).norm()).sum::<f64>()
+            };
+            let (lu, lv) = (iso(true), iso(false));
+            poles[j] = (
+                nu <= 1e-6 * nv || lu <= 1e-6 * lv,
+                nv <= 1e-6 * nu || lv <= 1e-6 * lu,
+            );
             if let Some((fu, fv)) = from {
                 if let Some(p) = full_u {
                     u = unwrap(u, fu, p);
