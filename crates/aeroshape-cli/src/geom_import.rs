@@ -110,8 +110,18 @@ pub fn run(a: &ImportArgs) -> anyhow::Result<()> {
         db.corners.len(),
         db.control_nodes.len()
     );
+    let re = report
+        .entities
+        .iter()
+        .filter(|e| e.method == "reapproximated")
+        .count();
+    let re = if re > 0 {
+        format!(" ({re} re-approximated: ill-conditioned exact conversion)")
+    } else {
+        String::new()
+    };
     outln!(
-        "  conversion: {} entities, max error {:.3e} (tolerance {:.3e}); max sewing gap {:.3e} (tolerance {:.3e})",
+        "  conversion: {} entities{re}, max error {:.3e} (tolerance {:.3e}); max sewing gap {:.3e} (tolerance {:.3e})",
         report.entities.len(),
         report.max_error,
         report.tolerance,

@@ -286,7 +286,10 @@ mod tests {
         assert_eq!((b, n), (vec![0.0, 0.5, 1.0], 1));
         // nothing short: unchanged; a single span is never merged
         assert_eq!(merge_short_spans(&[0.0, 0.5, 1.0], &len, 1e-6).1, 0);
-        assert_eq!(merge_short_spans(&[0.0, 1e-9], &len, 1e-6).0, vec![0.0, 1e-9]);
+        assert_eq!(
+            merge_short_spans(&[0.0, 1e-9], &len, 1e-6).0,
+            vec![0.0, 1e-9]
+        );
     }
 
     #[test]

@@ -34,9 +34,9 @@ pub mod model;
 mod report;
 mod roles;
 pub mod stage;
-mod units;
 #[cfg(test)]
 mod tests;
+mod units;
 
 pub use export::to_iges;
 pub use model::{CadModel, LengthUnit};

@@ -1,5 +1,6 @@
 //! Integration tests of the public API of `geom-db`.
 
+mod aircraft;
 mod analytic;
 mod cad_import;
 mod control;

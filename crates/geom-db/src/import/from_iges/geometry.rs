@@ -10,8 +10,8 @@ use iges::{DeId, Entity};
 use super::Front;
 use crate::import::Error;
 use crate::import::model::{
-    Affine, AngleParam, ConicKind, Curve, Frame, Piece, Surface,
-    canonical_curve, canonical_surface, closure_tol,
+    Affine, AngleParam, ConicKind, Curve, Frame, Piece, Surface, canonical_curve,
+    canonical_surface, closure_tol,
 };
 use crate::prelude::{Matrix3, Point3, Vector3};
 

@@ -317,9 +317,8 @@ impl Front<'_> {
                         }
                     }
                 }
-                let mut n =
-                    canonical_surface((b.u_degree, &ku), (b.v_degree, &kv), &pts, &w)
-                        .map_err(|e| self.bad(id, e))?;
+                let mut n = canonical_surface((b.u_degree, &ku), (b.v_degree, &kv), &pts, &w)
+                    .map_err(|e| self.bad(id, e))?;
                 n.closed_u = b.u_closed != Some(false) && n.meets_itself(true, closure_tol(&pts));
                 n.closed_v = b.v_closed != Some(false) && n.meets_itself(false, closure_tol(&pts));
                 Surface::Nurbs(n)

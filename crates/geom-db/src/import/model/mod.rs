@@ -15,8 +15,8 @@ mod surface;
 
 pub use curve::{ConicKind, Curve, Piece};
 pub use frame::{Affine, Frame};
-pub(crate) use nurbs::{canonical_curve, canonical_surface, closure_tol};
 pub use nurbs::{NurbsCurve, NurbsSurface};
+pub(crate) use nurbs::{canonical_curve, canonical_surface, closure_tol};
 pub use surface::{AngleParam, Domain, Surface};
 
 /// Where an item of the model comes from: an IGES directory entry or a STEP instance.

@@ -190,33 +190,33 @@ fn convert(
         err
     };
     let mut note = None;
-    let exact = c.exact_arcs(lo, hi).filter(|p| !p.is_empty()).and_then(|p| {
-        let degree = p.iter().map(|x| x.2.degree).max().unwrap_or(0);
-        let short = p
-            .iter()
-            .filter(|(a, b, _)| chord_length(&f, *a, *b) <= sew)
-            .count();
-        let err = sampled(&p);
-        let why = if degree > EXACT_MAX_DEGREE {
-            format!("degree {degree} above {EXACT_MAX_DEGREE}")
-        } else if short > 0 {
-            format!("{short} knot spans no longer than the sewing tolerance {sew:.3e}")
-        } else if !(err <= tol) {
-            format!("its exact arcs are {err:.3e} off (round-off), above the tolerance")
-        } else {
-            return Some((p, err));
-        };
-        note = Some(why);
-        None
-    });
+    let exact = c
+        .exact_arcs(lo, hi)
+        .filter(|p| !p.is_empty())
+        .and_then(|p| {
+            let degree = p.iter().map(|x| x.2.degree).max().unwrap_or(0);
+            let short = p
+                .iter()
+                .filter(|(a, b, _)| chord_length(&f, *a, *b) <= sew)
+                .count();
+            let err = sampled(&p);
+            let why = if degree > EXACT_MAX_DEGREE {
+                format!("degree {degree} above {EXACT_MAX_DEGREE}")
+            } else if short > 0 {
+                format!("{short} knot spans no longer than the sewing tolerance {sew:.3e}")
+            } else if !(err <= tol) {
+                format!("its exact arcs are {err:.3e} off (round-off), above the tolerance")
+            } else {
+                return Some((p, err));
+            };
+            note = Some(why);
+            None
+        });
     let (pieces, method, mut err) = match exact {
         Some((p, err)) => (p, "exact", err),
         None => {
-            let (breaks, merged) = merge_short_spans(
-                &c.breaks(lo, hi),
-                &|a, b| chord_length(&f, a, b),
-                sew,
-            );
+            let (breaks, merged) =
+                merge_short_spans(&c.breaks(lo, hi), &|a, b| chord_length(&f, a, b), sew);
             if merged > 0 {
                 let m = format!("{merged} knot spans shorter than {sew:.3e} merged");
                 note = Some(match note {

@@ -518,8 +518,16 @@ fn convert(
             .map(|p| p.deg_u.max(p.deg_v))
             .max()
             .unwrap_or(0);
-        let short = sup.u_breaks.windows(2).filter(|w| width_u(w[0], w[1]) <= sew).count()
-            + sup.v_breaks.windows(2).filter(|w| width_v(w[0], w[1]) <= sew).count();
+        let short = sup
+            .u_breaks
+            .windows(2)
+            .filter(|w| width_u(w[0], w[1]) <= sew)
+            .count()
+            + sup
+                .v_breaks
+                .windows(2)
+                .filter(|w| width_v(w[0], w[1]) <= sew)
+                .count();
         let err = sampled_error(s, &sup);
         if degree > EXACT_MAX_DEGREE {
             note = Some(format!("degree {degree} above {EXACT_MAX_DEGREE}"));

@@ -268,7 +268,11 @@ pub(crate) fn exact_loop(
                 let (a, b) = if along_u { trim.0 } else { trim.1 };
                 let at = |k: usize| {
                     let t = a + (b - a) * k as f64 / 8.0;
-                    if along_u { s.point(t, v) } else { s.point(u, t) }
+                    if along_u {
+                        s.point(t, v)
+                    } else {
+                        s.point(u, t)
+                    }
                 };
                 (0..8).map(|k| (at(k + 1) - at(k)).norm()).sum::<f64>()
             };
