@@ -59,7 +59,7 @@ fn main() {
         .collect();
     let rounds: usize = value("--rounds")
         .map(|v| v.parse().expect("--rounds value"))
-        .unwrap_or(FitOptions::default().minimax_rounds);
+        .unwrap_or(wingmaster::fit::DEFAULT_MINIMAX_ROUNDS);
     let cst_rounds: usize = value("--cst-rounds")
         .map(|v| v.parse().expect("--cst-rounds value"))
         .unwrap_or(0);

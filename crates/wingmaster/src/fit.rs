@@ -23,7 +23,8 @@ use crate::error::{Error, Result};
 use crate::section::{Section, SectionParams};
 use crate::thickness::{N_NAMED, ThicknessParams, split_extra};
 
-/// Default [`FitOptions::minimax_rounds`], chosen by the UIUC survey (`docs/perf-log/2026-12-07-sections.md`).
+/// The minimax rounds chosen by the UIUC survey (`docs/perf-log/2026-12-07-sections.md`); the
+/// survey's default. [`FitOptions::default`] keeps 0 (least squares, as before).
 pub const DEFAULT_MINIMAX_ROUNDS: usize = 5;
 
 /// Options of [`fit`].
@@ -40,7 +41,8 @@ pub struct FitOptions {
     /// squared normal distances by less than this fraction.
     pub tolerance: f64,
     /// Rounds of Lawson's reweighting towards the minimax fit after the least-squares fit
-    /// (0: least squares only). Each round multiplies every point's weight by its distance
+    /// (0, the default: least squares only; [`DEFAULT_MINIMAX_ROUNDS`] is the surveyed
+    /// choice). Each round multiplies every point's weight by its distance
     /// (normalised by the weighted mean) and refits from the previous solution; the round
     /// with the smallest maximum distance is returned.
     pub minimax_rounds: usize,
@@ -53,7 +55,7 @@ impl Default for FitOptions {
             thickness_extra: 0,
             max_iterations: 200,
             tolerance: 1e-4,
-            minimax_rounds: DEFAULT_MINIMAX_ROUNDS,
+            minimax_rounds: 0,
         }
     }
 }
