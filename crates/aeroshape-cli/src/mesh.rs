@@ -74,6 +74,10 @@ struct Info {
     classified_nodes: Option<[usize; 4]>,
     parametric: bool,
     quality: mesh::quality::Summary,
+    /// The summary per cell kind (kinds present).
+    quality_by_kind: BTreeMap<&'static str, mesh::quality::Summary>,
+    /// The lowest-quality cells (up to 5), worst first.
+    worst: Vec<mesh::quality::CellQuality>,
     min_angle_deg: Option<f64>,
     warnings: Vec<String>,
 }
@@ -120,6 +124,11 @@ fn gather(path: &Path, m: &Mesh) -> Info {
         }),
         parametric: m.parametric,
         quality: mesh::quality::summary(&q),
+        quality_by_kind: mesh::quality::summary_by_kind(&m.cells, &q)
+            .into_iter()
+            .map(|(k, s)| (k.name(), s))
+            .collect(),
+        worst: mesh::quality::worst_cells(&m.cells, &q, 5),
         min_angle_deg: min_angle,
         warnings: m.warnings.clone(),
     }
@@ -167,7 +176,7 @@ fn info(a: &InfoArgs) -> anyhow::Result<()> {
     let s = &i.quality;
     if s.measured > 0 {
         outln!(
-            "quality (signed mean ratio, {} of {} cells measured): min {:.4}, mean {:.4}, 1st percentile {:.4}, max {:.4}, {} with q <= 0",
+            "quality ({} of {} cells; signed mean ratio of tetrahedra and triangles, scaled Jacobian of the other kinds): min {:.4}, mean {:.4}, 1st percentile {:.4}, max {:.4}, {} invalid (q <= 0)",
             s.measured,
             s.count,
             s.min,
@@ -176,8 +185,21 @@ fn info(a: &InfoArgs) -> anyhow::Result<()> {
             s.max,
             s.n_nonpositive
         );
+        for (k, s) in &i.quality_by_kind {
+            outln!(
+                "  {k}: min {:.4}, mean {:.4}, 1st percentile {:.4}, {} invalid",
+                s.min,
+                s.mean,
+                s.p1,
+                s.n_nonpositive
+            );
+        }
+        if s.n_nonpositive > 0 {
+            let w: Vec<String> = i.worst.iter().map(ToString::to_string).collect();
+            outln!("worst: {}", w.join(", "));
+        }
     } else {
-        outln!("quality: no tetrahedra or triangles to measure");
+        outln!("quality: no cells to measure");
     }
     if let Some(a) = i.min_angle_deg {
         let what = if i.dim == 3 { "dihedral" } else { "corner" };

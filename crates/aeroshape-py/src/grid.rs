@@ -4,7 +4,8 @@
 //!
 //! Element kinds are named as the `mesh` crate names them: "line", "triangle", "quad",
 //! "tetra", "pyramid", "prism", "hexa" (meshio: "line", "triangle", "quad", "tetra",
-//! "pyramid", "wedge", "hexahedron"). The arrays a `Mesh` hands out are read-only copies:
+//! "pyramid", "wedge", "hexahedron"), in VTK's node orders (meshio's wedge is in Gmsh's:
+//! columns 0, 2, 1, 3, 5, 4 give ours). The arrays a `Mesh` hands out are read-only copies:
 //! change the coordinates by assigning `mesh.coordinates = new`.
 
 use std::path::PathBuf;

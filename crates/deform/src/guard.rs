@@ -15,19 +15,17 @@ use crate::increment::{Attempt, Context, Increment};
 use crate::report::{DeformReport, FarField, PhaseTimes};
 use crate::support::{SupKind, Support};
 
-/// Signed quality of every cell (canonical order; NaN for kinds without a measure) for the
-/// grid's connectivity at coordinates `x`.
+/// Quality of every cell ([`mesh::quality::element_quality`]: every kind, `q ≤ 0` for a flat
+/// or inverted cell; canonical order) for the grid's connectivity at coordinates `x`.
 pub fn cell_quality(mesh: &Mesh, x: &[[f64; 3]]) -> Vec<f64> {
     mesh::quality::cell_quality_at(mesh, x)
 }
 
-/// The `k` worst cells as "id (q = …)".
-fn worst_cells(q: &[f64], k: usize) -> String {
-    let mut idx: Vec<usize> = (0..q.len()).filter(|&i| !q[i].is_nan()).collect();
-    idx.sort_by(|&a, &b| q[a].total_cmp(&q[b]).then(a.cmp(&b)));
-    idx.iter()
-        .take(k)
-        .map(|&i| format!("cell {i} (q = {:.3e})", q[i]))
+/// The `k` worst cells as "cell id (kind, q = …)".
+fn worst_cells(mesh: &Mesh, q: &[f64], k: usize) -> String {
+    mesh::quality::worst_cells(&mesh.cells, q, k)
+        .iter()
+        .map(ToString::to_string)
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -119,7 +117,7 @@ pub(crate) fn run(
             continue;
         }
         if after.n_nonpositive > before.n_nonpositive {
-            let worst = worst_cells(&q1, 5);
+            let worst = worst_cells(mesh, &q1, 5);
             if !opts.allow_inverted {
                 return Err(Error::Inverted {
                     count: after.n_nonpositive,

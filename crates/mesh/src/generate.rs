@@ -1,6 +1,7 @@
 //! Structured test grids: a box split into tetrahedra (six per cube, the Kuhn
 //! subdivision along the main diagonal, all positively oriented) with the six faces as
-//! markers `x_m x_p y_m y_p z_m z_p` like SU2's brick, and seeded random node renumbering.
+//! markers `x_m x_p y_m y_p z_m z_p` like SU2's brick, the same box of hexahedra or of
+//! prisms (layers along z, as a boundary layer), and seeded random node renumbering.
 
 use crate::grid::{ElementKind, Elements, Marker, Mesh};
 
@@ -98,6 +99,86 @@ pub fn box_tets(nx: usize, ny: usize, nz: usize, lo: [f64; 3], hi: [f64; 3]) -> 
                 elements: el,
             });
         }
+    }
+    mesh
+}
+
+/// A box `[lo, hi]` of `nx × ny × nz` hexahedra ([`ElementKind::Hexa`]) or of prisms
+/// ([`ElementKind::Prism`]: each cube split in two along the diagonal of its z faces, the
+/// prism axes along z, as in a boundary layer over the plane z = lo), in this crate's node
+/// order, all valid. Nodes as [`box_tets`]; markers `x_m x_p y_m y_p z_m z_p` with outward
+/// normals: quadrilaterals, or triangles on the z faces of the prism box. Any other kind
+/// gives the hexahedra.
+///
+/// ```
+/// use mesh::ElementKind;
+/// let m = mesh::generate::box_layers([2, 3, 4], [0.0; 3], [1.0, 2.0, 1e-3], ElementKind::Prism);
+/// assert_eq!(m.cells.count(ElementKind::Prism), 2 * 24);
+/// assert_eq!(m.marker("z_m").unwrap().elements.count(ElementKind::Triangle), 12);
+/// let q = mesh::quality::summary(&mesh::quality::cell_quality(&m));
+/// assert_eq!((q.measured, q.n_nonpositive), (48, 0));
+/// ```
+pub fn box_layers(n: [usize; 3], lo: [f64; 3], hi: [f64; 3], kind: ElementKind) -> Mesh {
+    let prisms = kind == ElementKind::Prism;
+    let n = n.map(|v| v.max(1));
+    let mut mesh = box_tets(n[0], n[1], n[2], lo, hi);
+    let idx = |i: usize, j: usize, k: usize| (i + (n[0] + 1) * (j + (n[1] + 1) * k)) as u32;
+    let mut cells = Elements::new();
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let p = [
+                    idx(i, j, k),
+                    idx(i + 1, j, k),
+                    idx(i + 1, j + 1, k),
+                    idx(i, j + 1, k),
+                ];
+                let q = [
+                    idx(i, j, k + 1),
+                    idx(i + 1, j, k + 1),
+                    idx(i + 1, j + 1, k + 1),
+                    idx(i, j + 1, k + 1),
+                ];
+                if prisms {
+                    // VTK's order: the first triangle turns clockwise seen from the second.
+                    cells.push(kind, &[p[0], p[2], p[1], q[0], q[2], q[1]], None);
+                    cells.push(kind, &[p[0], p[3], p[2], q[0], q[3], q[2]], None);
+                } else {
+                    cells.push(
+                        ElementKind::Hexa,
+                        &[p[0], p[1], p[2], p[3], q[0], q[1], q[2], q[3]],
+                        None,
+                    );
+                }
+            }
+        }
+    }
+    mesh.cells = cells;
+    for mk in &mut mesh.markers {
+        let a = ["x", "y", "z"]
+            .iter()
+            .position(|c| mk.name.starts_with(c))
+            .unwrap_or(0);
+        if prisms && a == 2 {
+            continue;
+        }
+        // Pairs of triangles (p00, p10, p11), (p00, p11, p01) or their reverses: one quad.
+        let t = mk
+            .elements
+            .group(ElementKind::Triangle)
+            .map(|g| g.nodes.clone())
+            .unwrap_or_default();
+        let mut el = Elements::new();
+        for c in t.chunks_exact(6) {
+            if c[2] == c[4] {
+                // Outward +a: (p00, p10, p11), (p00, p11, p01).
+                el.push(ElementKind::Quad, &[c[0], c[1], c[2], c[5]], None);
+            } else {
+                // Outward −a: (p00, p11, p10), (p00, p01, p11).
+                el.push(ElementKind::Quad, &[c[0], c[4], c[1], c[2]], None);
+            }
+        }
+        mk.elements = el;
     }
     mesh
 }

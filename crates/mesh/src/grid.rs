@@ -17,11 +17,15 @@ pub enum ElementKind {
     Quad,
     /// 4-node tetrahedron.
     Tetra,
-    /// 5-node pyramid (quadrilateral base 0-3, apex 4).
+    /// 5-node pyramid (quadrilateral base 0-3, apex 4; the base's right-hand normal points
+    /// towards the apex, as in VTK, SU2 and Gmsh).
     Pyramid,
-    /// 6-node prism (wedge): triangle 0-2 and triangle 3-5.
+    /// 6-node prism (wedge): triangle 0-2 and triangle 3-5, with edges 0-3, 1-4, 2-5. VTK's
+    /// and SU2's order: the right-hand normal of 0-1-2 points *away* from 3-4-5. Gmsh's
+    /// order is the other one (nodes 1 and 2, 4 and 5 swapped); [`ElementKind::gmsh_order`].
     Prism,
-    /// 8-node hexahedron: face 0-3 and face 4-7.
+    /// 8-node hexahedron: face 0-3 and face 4-7 (edges 0-4, 1-5, 2-6, 3-7); the right-hand
+    /// normal of 0-1-2-3 points towards 4-7, as in VTK, SU2 and Gmsh.
     Hexa,
 }
 
@@ -99,8 +103,30 @@ impl ElementKind {
             .find(|k| i64::from(k.gmsh_code()) == code)
     }
 
-    /// The element's edges as pairs of local node numbers (VTK/Gmsh numbering, which agree
-    /// for these first-order kinds).
+    /// Gmsh's local node numbers in this crate's order: node `i` of an element here is node
+    /// `gmsh_order()[i]` of the same element in a Gmsh file. The identity except for the
+    /// prism, whose Gmsh numbering puts the right-hand normal of 0-1-2 towards 3-4-5 (Gmsh's
+    /// reference prism: (0,0,0), (1,0,0), (0,1,0), then the same at z = 1) where VTK and
+    /// SU2 (this crate's order) put it away: `[0, 2, 1, 3, 5, 4]`, its own inverse.
+    ///
+    /// ```
+    /// use mesh::ElementKind;
+    /// assert_eq!(ElementKind::Prism.gmsh_order(), &[0, 2, 1, 3, 5, 4]);
+    /// assert_eq!(ElementKind::Hexa.gmsh_order(), &[0, 1, 2, 3, 4, 5, 6, 7]);
+    /// ```
+    pub const fn gmsh_order(self) -> &'static [u8] {
+        match self {
+            ElementKind::Line => &[0, 1],
+            ElementKind::Triangle => &[0, 1, 2],
+            ElementKind::Quad | ElementKind::Tetra => &[0, 1, 2, 3],
+            ElementKind::Pyramid => &[0, 1, 2, 3, 4],
+            ElementKind::Prism => &[0, 2, 1, 3, 5, 4],
+            ElementKind::Hexa => &[0, 1, 2, 3, 4, 5, 6, 7],
+        }
+    }
+
+    /// The element's edges as pairs of local node numbers (this crate's numbering, which is
+    /// VTK's and SU2's; see [`ElementKind::gmsh_order`] for Gmsh's).
     pub const fn edges(self) -> &'static [[u8; 2]] {
         match self {
             ElementKind::Line => &[[0, 1]],
@@ -271,6 +297,28 @@ impl Elements {
     /// Number of elements of one kind.
     pub fn count(&self, kind: ElementKind) -> usize {
         self.group(kind).map_or(0, ElementGroup::len)
+    }
+
+    /// The kind of element `id` (canonical order), or `None` past the end.
+    ///
+    /// ```
+    /// use mesh::{ElementKind, Elements};
+    /// let mut e = Elements::new();
+    /// e.push(ElementKind::Prism, &[0, 1, 2, 3, 4, 5], None);
+    /// e.push(ElementKind::Tetra, &[0, 1, 2, 3], None);
+    /// assert_eq!(e.kind_of(0), Some(ElementKind::Tetra));
+    /// assert_eq!(e.kind_of(1), Some(ElementKind::Prism));
+    /// assert_eq!(e.kind_of(2), None);
+    /// ```
+    pub fn kind_of(&self, id: usize) -> Option<ElementKind> {
+        let mut at = 0;
+        for g in &self.groups {
+            at += g.len();
+            if id < at {
+                return Some(g.kind);
+            }
+        }
+        None
     }
 
     /// Iterator over `(kind, nodes)` of every element in canonical order.

@@ -14,10 +14,14 @@
 //! - [`foam`]: OpenFOAM polyMesh reader, and writer back into the case it came from.
 //! - [`io`]: reading and writing by file extension.
 //! - [`generate`]: structured tetrahedral boxes for tests and benchmarks.
-//! - [`quality`]: signed mean ratio, minimum angles, summaries, grid comparison.
+//! - [`quality`]: validity and quality of every kind (signed mean ratio of tetrahedra and
+//!   triangles, scaled Jacobian of the others), minimum angles, summaries, grid comparison.
 //!
 //! No paper equation is implemented here; the quality measure is the project's (DESIGN.md):
-//! mean ratio `q = 12 (3|V|)^(2/3) / Σ l²` over the six edges of a tetrahedron, signed by `V`.
+//! mean ratio `q = 12 (3|V|)^(2/3) / Σ l²` over the six edges of a tetrahedron, signed by `V`;
+//! for pyramids, prisms, hexahedra and quadrilaterals the smallest scaled corner Jacobian.
+//! Node orders are VTK's (and SU2's) for every kind; the MSH reader and writer convert
+//! Gmsh's prism ([`ElementKind::gmsh_order`]).
 
 pub mod adjacency;
 pub mod error;

@@ -1,13 +1,31 @@
-//! Element quality (DESIGN.md): the signed mean ratio of tetrahedra and triangles, minimum
-//! dihedral (or corner) angles, summaries and the comparison of two grids with the same
-//! connectivity.
+//! Element quality (DESIGN.md): validity and a quality measure for every element kind,
+//! minimum dihedral (or corner) angles, summaries and the comparison of two grids with the
+//! same connectivity.
 //!
-//! Tetrahedron, edges `l_1..l_6`, signed volume `V = (b-a)·((c-a)×(d-a))/6`:
-//! `q = sign(V) · 12 (3|V|)^(2/3) / Σ l_i²` — 1 for the regular tetrahedron, 0 when flat,
-//! negative when inverted. Triangle, area `A`: `q = 4√3 A / Σ l_i²`, signed by the
-//! orientation in 2D grids (`A` from the z component of `(b-a)×(c-a)`), unsigned in 3D.
-//! Other kinds (quads, pyramids, prisms, hexahedra) have no measure here: their entry is
-//! NaN and summaries count them as unmeasured.
+//! Tetrahedron, edges `l_1..l_6`, signed volume `V = (b-a)·((c-a)×(d-a))/6`: the signed
+//! mean ratio `q = sign(V) · 12 (3|V|)^(2/3) / Σ l_i²` — 1 for the regular tetrahedron,
+//! 0 when flat, negative when inverted. Triangle, area `A`: `q = 4√3 A / Σ l_i²`, signed by
+//! the orientation in 2D grids (`A` from the z component of `(b-a)×(c-a)`), unsigned in 3D.
+//!
+//! Pyramids, prisms, hexahedra and quadrilaterals: the scaled Jacobian, the smallest over
+//! the element's corners of `J_c / (|e_1| |e_2| |e_3|)`, where `e_1, e_2, e_3` are the edges
+//! from corner `c` to its three neighbours taken so that `J_c = e_1 · (e_2 × e_3) > 0` in a
+//! valid element (the volume of the corner's sub-tetrahedron, times 6). Each corner value
+//! is in [−1, 1] (1: the three edges orthogonal). It is scaled so that the ideal element of
+//! the kind gives 1 and clamped to at most 1: prisms by 2/√3 (the corners of an
+//! equilateral triangle), pyramids by √2 (the base corners of the pyramid with all edges
+//! equal); hexahedra unscaled. A pyramid's corners are its four base corners (the four
+//! sub-tetrahedra that leave out one base node, which also cover the apex). Quadrilaterals:
+//! corner values `(e_1 × e_2) · n / (|e_1| |e_2|)` with `n` the unit z axis in 2D grids and
+//! the unit normal `(c-a)×(d-b)` of the quadrilateral in 3D.
+//!
+//! Validity is the same for every kind: an element is valid when every corner's Jacobian
+//! is positive, that is when its quality is positive; `q ≤ 0` marks a flat or inverted
+//! element (the guard's and the reports' "inverted" count). Zero-length edges give 0,
+//! never NaN. Lines have no measure (NaN); they are never cells of a grid.
+//!
+//! Node orders are this crate's ([`ElementKind`]: VTK's and SU2's); readers of other
+//! orders convert (Gmsh's prism: [`ElementKind::gmsh_order`]).
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -170,8 +188,9 @@ fn per_element(
     out
 }
 
-/// Signed mean ratio of every cell, in canonical element order (NaN for kinds without a
-/// measure). Node indices must be valid ([`Mesh::validate`]).
+/// Quality of every cell ([`element_quality`]: signed mean ratio of tetrahedra and
+/// triangles, scaled Jacobian of the other kinds), in canonical element order; `q ≤ 0`
+/// marks a flat or inverted cell. Node indices must be valid ([`Mesh::validate`]).
 pub fn cell_quality(mesh: &Mesh) -> Vec<f64> {
     cell_quality_at(mesh, &mesh.coords)
 }
@@ -185,24 +204,178 @@ pub fn cell_quality_at(mesh: &Mesh, x: &[P]) -> Vec<f64> {
     })
 }
 
-/// Signed mean ratio of one element of kind `kind` with nodes `e` at coordinates `x`: a
-/// tetrahedron ([`tet_quality`]) or a triangle ([`triangle_quality`], signed in 2-D grids);
-/// NaN for other kinds.
+/// Quality of one element of kind `kind` with nodes `e` at coordinates `x`: the signed mean
+/// ratio of a tetrahedron ([`tet_quality`]) or a triangle ([`triangle_quality`], signed in
+/// 2-D grids), the scaled Jacobian of a pyramid, prism or hexahedron ([`scaled_jacobian`])
+/// or a quadrilateral ([`quad_scaled_jacobian`], signed in 2-D grids). Positive exactly
+/// when the element is valid (every corner Jacobian positive); NaN only for lines.
+///
+/// ```
+/// use mesh::{ElementKind, quality::element_quality};
+/// // The unit prism in this crate's (VTK's) order, and the same with Gmsh's order.
+/// let x = [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0],
+///          [0.0, 0.0, 1.0], [0.0, 1.0, 1.0], [1.0, 0.0, 1.0]];
+/// assert!(element_quality(ElementKind::Prism, &[0, 1, 2, 3, 4, 5], &x, false) > 0.0);
+/// assert!(element_quality(ElementKind::Prism, &[0, 2, 1, 3, 5, 4], &x, false) < 0.0);
+/// ```
 #[inline]
 pub fn element_quality(kind: ElementKind, e: &[u32], x: &[P], signed: bool) -> f64 {
+    let p = |i: usize| x[e[i] as usize];
     match kind {
-        ElementKind::Tetra => tet_quality([
-            x[e[0] as usize],
-            x[e[1] as usize],
-            x[e[2] as usize],
-            x[e[3] as usize],
-        ]),
-        ElementKind::Triangle => triangle_quality(
-            [x[e[0] as usize], x[e[1] as usize], x[e[2] as usize]],
-            signed,
-        ),
-        _ => f64::NAN,
+        ElementKind::Tetra => tet_quality([p(0), p(1), p(2), p(3)]),
+        ElementKind::Triangle => triangle_quality([p(0), p(1), p(2)], signed),
+        ElementKind::Quad => quad_scaled_jacobian([p(0), p(1), p(2), p(3)], signed),
+        ElementKind::Pyramid | ElementKind::Prism | ElementKind::Hexa => {
+            let mut q = [[0.0; 3]; 8];
+            for (k, qk) in q.iter_mut().enumerate().take(kind.n_nodes()) {
+                *qk = p(k);
+            }
+            scaled_jacobian(kind, &q[..kind.n_nodes()])
+        }
+        ElementKind::Line => f64::NAN,
     }
+}
+
+/// The corner sub-tetrahedra `(corner, a, b, c)` of a pyramid, prism or hexahedron in this
+/// crate's node order: `(a−corner) · ((b−corner) × (c−corner)) > 0` in a valid element.
+/// Empty for the other kinds.
+///
+/// ```
+/// use mesh::{ElementKind, quality::{corners, tet_volume}};
+/// // The unit cube: every corner's sub-tetrahedron has volume 1/6.
+/// let x = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0],
+///          [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0]];
+/// for c in corners(ElementKind::Hexa) {
+///     let v = tet_volume(c.map(|i| x[i as usize]));
+///     assert!((v - 1.0 / 6.0).abs() < 1e-15);
+/// }
+/// ```
+pub const fn corners(kind: ElementKind) -> &'static [[u8; 4]] {
+    match kind {
+        ElementKind::Pyramid => &[[0, 1, 3, 4], [1, 2, 0, 4], [2, 3, 1, 4], [3, 0, 2, 4]],
+        ElementKind::Prism => &[
+            [0, 2, 1, 3],
+            [1, 0, 2, 4],
+            [2, 1, 0, 5],
+            [3, 4, 5, 0],
+            [4, 5, 3, 1],
+            [5, 3, 4, 2],
+        ],
+        ElementKind::Hexa => &[
+            [0, 1, 3, 4],
+            [1, 2, 0, 5],
+            [2, 3, 1, 6],
+            [3, 0, 2, 7],
+            [4, 7, 5, 0],
+            [5, 4, 6, 1],
+            [6, 5, 7, 2],
+            [7, 6, 4, 3],
+        ],
+        _ => &[],
+    }
+}
+
+/// The factor that makes the ideal element's corners 1 ([`scaled_jacobian`]).
+fn corner_scale(kind: ElementKind) -> f64 {
+    match kind {
+        // An equilateral triangle's corner: sin 60° = √3/2.
+        ElementKind::Prism => 2.0 / 3f64.sqrt(),
+        // The base corner of the pyramid with equal edges: height 1/√2 for unit edges.
+        ElementKind::Pyramid => 2f64.sqrt(),
+        _ => 1.0,
+    }
+}
+
+/// One corner's scaled Jacobian `a · (b × c) / (|a| |b| |c|)` (0 with a zero-length edge).
+#[inline]
+fn corner_value(a: P, b: P, c: P) -> f64 {
+    let l = (dot(a, a) * dot(b, b) * dot(c, c)).sqrt();
+    if l == 0.0 {
+        return 0.0;
+    }
+    let j = dot(a, cross(b, c)) / l;
+    // Round-off can leave |j| a few ulps above 1; NaN only from non-finite coordinates.
+    j.clamp(-1.0, 1.0)
+}
+
+/// Scaled Jacobian of a pyramid, prism or hexahedron with node coordinates `p` (this crate's
+/// order, `kind.n_nodes()` points): the smallest corner value over [`corners`], scaled so
+/// that the ideal element gives 1 and clamped to at most 1. Positive exactly when every
+/// corner sub-tetrahedron is; NaN for other kinds.
+///
+/// ```
+/// use mesh::{ElementKind, quality::scaled_jacobian};
+/// let s = 3f64.sqrt() / 2.0;
+/// // Equilateral unit prism (VTK order: 0-1-2 turns clockwise seen from 3-4-5).
+/// let prism = [[0.0, 0.0, 0.0], [0.5, s, 0.0], [1.0, 0.0, 0.0],
+///              [0.0, 0.0, 1.0], [0.5, s, 1.0], [1.0, 0.0, 1.0]];
+/// testkit::assert_close!(scaled_jacobian(ElementKind::Prism, &prism), 1.0, rel = 1e-14);
+/// // Its top lowered below the bottom: inverted.
+/// let mut flat = prism;
+/// for p in &mut flat[3..] { p[2] = -0.1; }
+/// assert!(scaled_jacobian(ElementKind::Prism, &flat) < 0.0);
+/// ```
+pub fn scaled_jacobian(kind: ElementKind, p: &[P]) -> f64 {
+    let cs = corners(kind);
+    if cs.is_empty() || p.len() != kind.n_nodes() {
+        return f64::NAN;
+    }
+    let mut q = f64::INFINITY;
+    for c in cs {
+        let o = p[c[0] as usize];
+        let v = corner_value(
+            sub(p[c[1] as usize], o),
+            sub(p[c[2] as usize], o),
+            sub(p[c[3] as usize], o),
+        );
+        q = q.min(v);
+    }
+    (q * corner_scale(kind)).min(1.0)
+}
+
+/// Scaled Jacobian of a quadrilateral `abcd`: the smallest over its corners of
+/// `(e_1 × e_2) · n / (|e_1| |e_2|)`, `e_1` and `e_2` the edges to the next and the previous
+/// corner. `n` is the z axis with `signed` (2-D grids: negative when the quadrilateral turns
+/// clockwise) and the unit normal `(c−a) × (d−b)` otherwise (then a quadrilateral is
+/// negative only where it folds: a reflex corner or a bow tie). 1 for a rectangle; 0 with
+/// a zero-length edge or diagonal.
+///
+/// ```
+/// use mesh::quality::quad_scaled_jacobian;
+/// let sq = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+/// assert_eq!(quad_scaled_jacobian(sq, true), 1.0);
+/// let cw = [sq[0], sq[3], sq[2], sq[1]];
+/// assert_eq!(quad_scaled_jacobian(cw, true), -1.0);
+/// assert_eq!(quad_scaled_jacobian(cw, false), 1.0);
+/// // A reflex corner (the dart): negative either way.
+/// let dart = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.0, 2.0, 0.0]];
+/// assert!(quad_scaled_jacobian(dart, true) < 0.0);
+/// assert!(quad_scaled_jacobian(dart, false) < 0.0);
+/// ```
+pub fn quad_scaled_jacobian(p: [P; 4], signed: bool) -> f64 {
+    let n = if signed {
+        [0.0, 0.0, 1.0]
+    } else {
+        let n = cross(sub(p[2], p[0]), sub(p[3], p[1]));
+        let l = dot(n, n).sqrt();
+        if l == 0.0 {
+            return 0.0;
+        }
+        [n[0] / l, n[1] / l, n[2] / l]
+    };
+    let mut q = f64::INFINITY;
+    for i in 0..4 {
+        let o = p[i];
+        let (a, b) = (sub(p[(i + 1) % 4], o), sub(p[(i + 3) % 4], o));
+        let l = (dot(a, a) * dot(b, b)).sqrt();
+        let v = if l == 0.0 {
+            0.0
+        } else {
+            (dot(cross(a, b), n) / l).clamp(-1.0, 1.0)
+        };
+        q = q.min(v);
+    }
+    q
 }
 
 #[cfg(test)]
@@ -262,6 +435,85 @@ pub fn node_quality(mesh: &Mesh, cell_q: &[f64]) -> Vec<f64> {
             }
             e += 1;
         }
+    }
+    out
+}
+
+/// One cell of a quality field, for messages and reports.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CellQuality {
+    /// Cell id (canonical order).
+    pub id: usize,
+    /// Its kind.
+    pub kind: ElementKind,
+    /// Its quality.
+    pub quality: f64,
+}
+
+impl std::fmt::Display for CellQuality {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "cell {} ({}, q = {:.3e})",
+            self.id,
+            self.kind.name(),
+            self.quality
+        )
+    }
+}
+
+/// The `k` lowest-quality cells of the field `q` over `cells` (canonical order, NaN
+/// skipped), worst first, ties by id.
+///
+/// ```
+/// use mesh::{ElementKind, Elements, quality::worst_cells};
+/// let mut e = Elements::new();
+/// e.push(ElementKind::Tetra, &[0, 1, 2, 3], None);
+/// e.push(ElementKind::Hexa, &[0, 1, 2, 3, 4, 5, 6, 7], None);
+/// let w = worst_cells(&e, &[0.5, -0.25], 1);
+/// assert_eq!(w[0].to_string(), "cell 1 (hexa, q = -2.500e-1)");
+/// ```
+pub fn worst_cells(cells: &Elements, q: &[f64], k: usize) -> Vec<CellQuality> {
+    let mut idx: Vec<usize> = (0..q.len()).filter(|&i| !q[i].is_nan()).collect();
+    let k = k.min(idx.len());
+    if k == 0 {
+        return Vec::new();
+    }
+    let by = |a: &usize, b: &usize| q[*a].total_cmp(&q[*b]).then(a.cmp(b));
+    idx.select_nth_unstable_by(k - 1, by);
+    idx.truncate(k);
+    idx.sort_unstable_by(by);
+    idx.into_iter()
+        .map(|id| CellQuality {
+            id,
+            kind: cells.kind_of(id).unwrap_or(ElementKind::Line),
+            quality: q[id],
+        })
+        .collect()
+}
+
+/// The summary of the field `q` over `cells` per element kind, in canonical kind order
+/// (kinds present only).
+///
+/// ```
+/// use mesh::{ElementKind, Elements, quality::summary_by_kind};
+/// let mut e = Elements::new();
+/// e.push(ElementKind::Tetra, &[0, 1, 2, 3], None);
+/// e.push(ElementKind::Prism, &[0, 1, 2, 3, 4, 5], None);
+/// e.push(ElementKind::Prism, &[0, 1, 2, 3, 4, 5], None);
+/// let s = summary_by_kind(&e, &[0.5, -0.1, 0.9]);
+/// assert_eq!((s[0].0, s[0].1.count), (ElementKind::Tetra, 1));
+/// assert_eq!((s[1].0, s[1].1.count, s[1].1.n_nonpositive), (ElementKind::Prism, 2, 1));
+/// ```
+pub fn summary_by_kind(cells: &Elements, q: &[f64]) -> Vec<(ElementKind, Summary)> {
+    let mut at = 0;
+    let mut out = Vec::new();
+    for g in cells.groups() {
+        let n = g.len();
+        if n > 0 && at + n <= q.len() {
+            out.push((g.kind, summary(&q[at..at + n])));
+        }
+        at += n;
     }
     out
 }

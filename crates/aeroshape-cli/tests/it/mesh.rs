@@ -33,7 +33,7 @@ fn info_prints_the_brick_counts_and_markers() {
     for m in ["x_m", "x_p", "y_m", "y_p", "z_m", "z_p"] {
         assert!(s.contains(&format!("  {m}: ")), "{s}");
     }
-    assert!(s.contains(", 0 with q <= 0"), "{s}");
+    assert!(s.contains(", 0 invalid (q <= 0)"), "{s}");
 }
 
 #[test]

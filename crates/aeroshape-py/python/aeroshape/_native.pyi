@@ -255,7 +255,8 @@ class Mesh:
 
     The arrays a mesh hands out are read-only copies: assign ``mesh.coordinates = new`` to
     move the nodes. Element kinds: "line", "triangle", "quad", "tetra", "pyramid",
-    "prism", "hexa" (meshio's "wedge" is "prism", "hexahedron" is "hexa").
+    "prism", "hexa" (meshio's "wedge" is "prism", "hexahedron" is "hexa"), with VTK's
+    node orders. meshio lists a wedge in Gmsh's order: take its columns 0, 2, 1, 3, 5, 4.
     """
 
     def __new__(

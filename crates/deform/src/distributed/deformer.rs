@@ -563,7 +563,7 @@ impl<'c> Deformer<'c> {
                 return Err(Error::Inverted {
                     count: bad1 as usize,
                     increments: inc,
-                    worst: format!("min quality {min1:.3e} over the ranks"),
+                    worst: super::quality::worst_cell(comm, cells, &cur, &part.grid.global_ids),
                 });
             }
             rep.increments = inc;

@@ -7,6 +7,7 @@ use mpi::collective::SystemOperation;
 use mpi::traits::*;
 
 use mesh::quality::Summary;
+use mesh::{ALL_KINDS, Mesh};
 
 use super::comm::{Comm, all_gather_vec, max, min, sum, sum_u64};
 
@@ -82,4 +83,49 @@ fn nth_smallest(comm: &Comm, q: &[f64], rank: usize, lo: f64, hi: f64) -> f64 {
         .collect();
     let mut all = all_gather_vec(comm, &mine);
     *all.select_nth_unstable_by(rank - below, f64::total_cmp).1
+}
+
+/// The worst cell over the ranks of the counted cells `cells` at the local coordinates `x`
+/// (`global`: the global id of every local node), for the guard's message: "kind with
+/// nodes g₀ g₁ … at (x, y, z) (q = …)", the same on every rank (ties: the lowest rank).
+/// Collective.
+pub(crate) fn worst_cell(comm: &Comm, cells: &Mesh, x: &[[f64; 3]], global: &[u64]) -> String {
+    let q = mesh::quality::cell_quality_at(cells, x);
+    // [q, kind index, n nodes, centroid (3), global node ids (8)], NaN q when none.
+    let mut rec = [f64::NAN; 14];
+    if let Some(w) = mesh::quality::worst_cells(&cells.cells, &q, 1).first() {
+        let nodes = cells.cells.iter().nth(w.id).map_or(&[][..], |(_, e)| e);
+        rec[0] = w.quality;
+        rec[1] = ALL_KINDS.iter().position(|k| *k == w.kind).unwrap_or(0) as f64;
+        rec[2] = nodes.len() as f64;
+        rec[3..6].fill(0.0);
+        for (k, &v) in nodes.iter().enumerate() {
+            for d in 0..3 {
+                rec[3 + d] += x[v as usize][d] / nodes.len() as f64;
+            }
+            rec[6 + k] = global[v as usize] as f64;
+        }
+    }
+    let all = all_gather_vec(comm, &rec);
+    let best = all
+        .chunks_exact(14)
+        .filter(|r| !r[0].is_nan())
+        .min_by(|a, b| a[0].total_cmp(&b[0]));
+    let Some(r) = best else {
+        return "no measured cell".into();
+    };
+    let kind = ALL_KINDS[r[1] as usize];
+    let ids: Vec<String> = r[6..6 + r[2] as usize]
+        .iter()
+        .map(|g| format!("{}", *g as u64))
+        .collect();
+    format!(
+        "{} with nodes {} at ({:.6e}, {:.6e}, {:.6e}) (q = {:.3e})",
+        kind.name(),
+        ids.join(" "),
+        r[3],
+        r[4],
+        r[5],
+        r[0]
+    )
 }

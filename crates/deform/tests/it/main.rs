@@ -2,6 +2,7 @@
 
 mod cases;
 mod identities;
+mod kinds;
 mod linearise;
 mod linearise_grids;
 mod props;

@@ -526,6 +526,8 @@ fn read_elements<R: BufRead>(
         reserve_capped(&mut g.nodes, nb.saturating_mul(kind.n_nodes()));
         reserve_capped(&mut g.entity, nb);
         let nn = kind.n_nodes();
+        // Gmsh's local numbering to this crate's (the prism's differs).
+        let order = kind.gmsh_order();
         if src.binary {
             // Binary: decode chunks of whole element records (tag + nodes, 8 bytes each).
             const CHUNK: usize = 4096;
@@ -553,7 +555,7 @@ fn read_elements<R: BufRead>(
                             n_nodes,
                         })?;
                     }
-                    g.nodes.extend_from_slice(&conn[..nn]);
+                    g.nodes.extend(order.iter().map(|&j| conn[j as usize]));
                     g.entity.push(etag);
                 }
                 done += k;
@@ -573,7 +575,7 @@ fn read_elements<R: BufRead>(
                 })?;
             }
             let g = staged.by_dim[edim as usize].group_mut(kind);
-            g.nodes.extend_from_slice(&conn[..nn]);
+            g.nodes.extend(order.iter().map(|&j| conn[j as usize]));
             g.entity.push(etag);
         }
     }

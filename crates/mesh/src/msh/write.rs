@@ -388,10 +388,16 @@ pub fn write<W: Write + ?Sized>(mesh: &Mesh, enc: Encoding, w: &mut W) -> std::i
         o.int(b.kind.gmsh_code());
         o.size((b.nodes.len() / nn) as u64);
         o.eol()?;
+        // This crate's local numbering to Gmsh's: Gmsh's node `order[i]` is our node `i`.
+        let order = b.kind.gmsh_order();
+        let mut gm = [0u32; 8];
         for el in b.nodes.chunks_exact(nn) {
             o.size(tag);
             tag += 1;
-            for &v in el {
+            for (i, &v) in el.iter().enumerate() {
+                gm[order[i] as usize] = v;
+            }
+            for &v in &gm[..nn] {
                 o.size(u64::from(v) + 1);
             }
             o.eol()?;

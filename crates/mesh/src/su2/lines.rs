@@ -239,7 +239,9 @@ pub(super) fn count(cx: &Ctx<'_>, ln: usize, key: &str, val: &[u8]) -> Result<us
 }
 
 /// Parses one point line of node `node`: `dim` finite coordinates, optionally the node's
-/// index.
+/// index. With `dim` 2 a third coordinate may follow, as in SU2's own 2-D grids
+/// (`x y z index`, z = 0): it is kept in `p[2]` (the reader then sets it to 0, as SU2
+/// ignores it). Three tokens `x y t` read `t` as the index when it is an integer, else as z.
 pub(super) fn parse_point(
     cx: &Ctx<'_>,
     ln: usize,
@@ -262,9 +264,38 @@ pub(super) fn parse_point(
             }
         }
     }
-    if let Some(t) = tok.next()
-        && (parse_u64(t).is_none() || tok.next().is_some())
+    let mut next = tok.next();
+    if dim == 2
+        && let Some(t) = next
     {
+        let after = tok.next();
+        // `x y z [index]`: a fourth token, or a third that is not an index.
+        if after.is_some() || parse_u64(t).is_none() {
+            match parse_f64(t) {
+                Some(z) if z.is_finite() => p[2] = z,
+                _ => {
+                    return Err(cx.err(
+                        ln,
+                        format!(
+                            "node {node}: coordinate 2 must be a finite number, found '{}'",
+                            lossy(t)
+                        ),
+                    ));
+                }
+            }
+            next = after;
+        } else {
+            // `x y index`: the index, nothing after.
+            next = None;
+        }
+    }
+    // The index, if any, must be the last token.
+    let bad = match next {
+        Some(t) if parse_u64(t).is_none() => Some(t),
+        Some(_) => tok.next(),
+        None => None,
+    };
+    if let Some(t) = bad {
         return Err(cx.err(
             ln,
             format!(

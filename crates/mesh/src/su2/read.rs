@@ -186,6 +186,18 @@ pub(super) fn read_by_blocks<R: std::io::Read + Send>(
                 let d = dim.ok_or_else(|| cx.err(ln, "NPOIN= before NDIME="))?;
                 let n = count(&cx, ln, "NPOIN", &val)?;
                 read_points(&cx, &mut rd, n, d, &mut mesh.coords)?;
+                if d == 2 {
+                    // SU2's 2-D grids may carry a z column: SU2 ignores it, and so do we.
+                    let off = mesh.coords.iter().filter(|p| p[2] != 0.0).count();
+                    if off > 0 {
+                        mesh.warnings.push(format!(
+                            "{file}: line {ln}: {off} nodes of this 2-D grid (NDIME= 2) have a nonzero z, set to 0 (as SU2 reads them)"
+                        ));
+                    }
+                    for p in &mut mesh.coords {
+                        p[2] = 0.0;
+                    }
+                }
                 seen_poin = true;
             }
             "NMARK" => {

@@ -4,6 +4,7 @@ mod adjacency;
 mod common;
 mod corrupt;
 mod foam;
+mod kinds;
 mod msh;
 mod oracle;
 mod quality;

@@ -189,8 +189,10 @@ fn malformed_msh_reports_file_and_place() {
 fn mixed_elements_survive_every_format() {
     // A hexahedron, a prism on top of it, a pyramid beside it and a tetrahedron; quads and
     // triangles on the boundary.
-    let txt = "NDIME= 3\nNELEM= 4\n12 0 1 2 3 4 5 6 7\n13 4 5 6 8 9 10\n14 1 11 12 2 13\n10 4 5 7 14\n\
-               NPOIN= 15\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n0.5 0.5 2\n\
+    // Every cell valid in SU2's (VTK's) order: the prism's first triangle 4-6-5 turns
+    // clockwise seen from its second, 9-8-10.
+    let txt = "NDIME= 3\nNELEM= 4\n12 0 1 2 3 4 5 6 7\n13 4 6 5 9 8 10\n14 1 11 12 2 13\n10 4 5 7 14\n\
+               NPOIN= 15\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n1 1 2\n\
                0 0 2\n1 0 2\n2 0 0\n2 1 0\n1.5 0.5 1\n0.2 0.2 1.5\n\
                NMARK= 2\nMARKER_TAG= bottom\nMARKER_ELEMS= 2\n9 0 3 2 1\n9 1 2 12 11\n\
                MARKER_TAG= top\nMARKER_ELEMS= 1\n5 8 9 10\n";
@@ -210,7 +212,20 @@ fn mixed_elements_survive_every_format() {
         let b = mesh::vtu::read(&buf[..], "mixed.vtu".as_ref()).unwrap();
         assert_same_grid(&a, &b);
     }
-    // Only the tetrahedron is measured.
+    // Every kind is measured, and every cell is valid.
     let s = mesh::quality::summary(&mesh::quality::cell_quality(&a));
-    assert_eq!((s.count, s.measured), (4, 1));
+    assert_eq!((s.count, s.measured, s.n_nonpositive), (4, 4, 0), "{s:?}");
+    // The MSH file lists the prism in Gmsh's order (first triangle towards the second):
+    // nodes 4 5 6 9 10 8, tags + 1.
+    let mut buf = Vec::new();
+    mesh::msh::write(&a, Encoding::Ascii, &mut buf).unwrap();
+    let text = String::from_utf8(buf).unwrap();
+    let block = text.split("\n3 1 6 1\n").nth(1).expect("the prism block");
+    assert_eq!(block.lines().next().unwrap(), "3 5 6 7 10 11 9", "{text}");
+    // A Gmsh-order prism read from MSH is valid here.
+    let b = mesh::msh::read(text.as_bytes(), "mixed.msh".as_ref()).unwrap();
+    assert_eq!(
+        b.cells.group(ElementKind::Prism).unwrap().nodes,
+        [4, 6, 5, 9, 8, 10]
+    );
 }

@@ -130,3 +130,98 @@ fn malformed_inputs_name_file_and_line() {
     let e = err("");
     assert!(matches!(e, Error::Truncated { .. }), "{e}");
 }
+
+fn su2_fixture(name: &str) -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/su2")
+        .join(name)
+}
+
+/// SU2's own 2-D RANS grids (`fixtures/su2`): the RAE2822 grid's points carry a z column
+/// (`x y 0 index`) and come before the elements; every cell is valid and the smallest
+/// quadrilateral scaled Jacobian is the independent script's (`check_2d.py`).
+#[test]
+fn su2_two_dimensional_rans_grids_read_with_real_quality() {
+    for (name, nodes, tri, quad, qmin, markers) in [
+        (
+            "mesh_RAE2822_turb.su2",
+            13937,
+            18042,
+            4800,
+            0.97110120647508,
+            [("AIRFOIL", 192), ("FARFIELD", 40)],
+        ),
+        (
+            "n0012_113-33.su2",
+            3704,
+            0,
+            3584,
+            0.80756756265483,
+            [("airfoil", 64), ("farfield", 176)],
+        ),
+    ] {
+        let m = read_su2(&su2_fixture(name));
+        m.validate().unwrap();
+        assert_eq!(m.dim, 2, "{name}");
+        assert_eq!(m.n_nodes(), nodes, "{name}");
+        assert_eq!(m.cells.count(ElementKind::Triangle), tri, "{name}");
+        assert_eq!(m.cells.count(ElementKind::Quad), quad, "{name}");
+        assert!(m.warnings.is_empty(), "{name}: {:?}", m.warnings);
+        for (mk, n) in markers {
+            assert_eq!(m.marker(mk).unwrap().elements.len(), n, "{name} {mk}");
+        }
+        let q = mesh::quality::cell_quality(&m);
+        let s = mesh::quality::summary(&q);
+        assert_eq!((s.measured, s.n_nonpositive), (m.cells.len(), 0), "{name}");
+        let by = mesh::quality::summary_by_kind(&m.cells, &q);
+        let (_, sq) = by.iter().find(|(k, _)| *k == ElementKind::Quad).unwrap();
+        testkit::assert_close!(sq.min, qmin, rel = 1e-12);
+        // Written back (2-D: x y index) and read again: the same grid.
+        let mut buf = Vec::new();
+        mesh::su2::write(&m, &mut buf).unwrap();
+        let b = mesh::su2::read(&buf[..], "back.su2".as_ref()).unwrap();
+        assert_same_grid(&m, &b);
+    }
+    // The first RAE2822 node as printed: "0.999999523162842\t0.000158801834913902\t0\t0".
+    let m = read_su2(&su2_fixture("mesh_RAE2822_turb.su2"));
+    assert_eq!(m.coords[0], [0.999999523162842, 0.000158801834913902, 0.0]);
+}
+
+/// The layouts of a 2-D point line: `x y`, `x y index`, `x y z`, `x y z index`; a nonzero z
+/// is dropped with a warning (SU2 ignores it), a bad z or a fifth token is an error.
+#[test]
+fn su2_two_dimensional_point_layouts() {
+    let grid = |pts: &str| {
+        format!(
+            "NDIME= 2\nNELEM= 1\n5 0 1 2 0\nNPOIN= 3\n{pts}NMARK= 1\nMARKER_TAG= w\nMARKER_ELEMS= 1\n3 0 1\n"
+        )
+    };
+    let want = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    for pts in [
+        "0 0\n1 0\n0 1\n",
+        "0 0 0\n1 0 1\n0 1 2\n",
+        "0 0 0.0\n1 0 0.0\n0 1 0.0\n",
+        "0 0 0 0\n1 0 0 1\n0 1 0 2\n",
+        "0\t0\t0\t0\n1\t0\t0\t1\n0\t1\t0\t2\n",
+    ] {
+        let m = mesh::su2::read(grid(pts).as_bytes(), "p.su2".as_ref()).unwrap();
+        assert_eq!(m.coords, want, "{pts:?}");
+        assert!(m.warnings.is_empty(), "{pts:?}: {:?}", m.warnings);
+    }
+    let m = mesh::su2::read(
+        grid("0 0 0.5 0\n1 0 0 1\n0 1 1e-3\n").as_bytes(),
+        "p.su2".as_ref(),
+    )
+    .unwrap();
+    assert_eq!(m.coords, want);
+    assert_eq!(m.warnings.len(), 1);
+    assert!(m.warnings[0].contains("2 nodes"), "{:?}", m.warnings);
+    let e = mesh::su2::read(grid("0 0 x 0\n1 0\n0 1\n").as_bytes(), "p.su2".as_ref()).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "p.su2: line 5: node 0: coordinate 2 must be a finite number, found 'x'"
+    );
+    let e =
+        mesh::su2::read(grid("0 0 0 0 7\n1 0\n0 1\n").as_bytes(), "p.su2".as_ref()).unwrap_err();
+    assert!(e.to_string().contains("unexpected token '7'"), "{e}");
+}
