@@ -121,7 +121,7 @@ fn init(a: &InitArgs) -> anyhow::Result<()> {
         outln!("  {b}");
     }
     outln!(
-        "design variables ({}), each alone at either bound keeps every cell valid:",
+        "design variables ({}), each alone at either bound inverts no cell:",
         r.variables.len()
     );
     outln!(

@@ -1,7 +1,8 @@
 //! The bounds of the default design space, checked by the study ([`check_bounds`]): each
-//! variable alone at either bound must leave every cell of the grid valid; a bound that
-//! does not (inverted cells, or an evaluation that fails, e.g. a junction that no longer
-//! intersects) is halved until it does. A variable that still fails after the halvings is
+//! variable alone at either bound must invert no cell of the grid (cells invalid in the
+//! baseline grid are not counted, as in the deformation's guard); a bound that does not
+//! (inverted cells, or an evaluation that fails, e.g. a junction that no longer intersects)
+//! is halved until it does. A variable that still fails after the halvings is
 //! returned as failed (`case init` leaves it out, with a note saying what failed).
 
 use serde::Serialize;
@@ -54,9 +55,15 @@ pub fn check_bounds(study: &Study, max_halvings: usize) -> Result<Checked, InitE
                 match study.evaluate(&x) {
                     Ok(ev) => {
                         q[k] = ev.report.quality_after.min;
-                        let inverted = ev.report.quality_after.inverted;
-                        if inverted > 0 {
-                            failure = Some(format!("{inverted} inverted cells at {b:+.3e}"));
+                        // Cells invalid in the baseline grid do not count against the
+                        // variable: only those it inverts (the guard's rule).
+                        let (was, inverted) = (
+                            ev.report.quality_before.inverted,
+                            ev.report.quality_after.inverted,
+                        );
+                        if inverted > was {
+                            failure =
+                                Some(format!("{} inverted cells at {b:+.3e}", inverted - was));
                         }
                     }
                     Err(e) => failure = Some(format!("at {b:+.3e}: {e}")),

@@ -13,7 +13,7 @@
 //!    master for a wing ([`wing`]), the waist at the wing junction ([`fuselage`]) and the
 //!    nose droop and stretch ([`nose`]) for a fuselage, normal bumps otherwise; every
 //!    variable that moves no control node left out, and the bounds checked by the study
-//!    ([`bounds`]): each variable alone at either bound leaves every cell valid.
+//!    ([`bounds`]): each variable alone at either bound inverts no cell.
 //!
 //! A geometry without control nodes (§3) cannot be moved by any design variable: that is
 //! an error ([`InitError::NoControlNodes`]) unless [`InitOptions::assign_control_nodes`]
@@ -279,6 +279,21 @@ pub fn init_case(
         built: space.built,
         notes: space.notes,
     };
+    let q0 = mesh::quality::cell_quality_at(grid, &grid.coords);
+    let invalid = mesh::quality::summary(&q0).n_nonpositive;
+    if invalid > 0 {
+        let worst = mesh::quality::worst_cells(&grid.cells, &q0, 3);
+        space.notes.push(format!(
+            "the grid has {} invalid cells before any change (worst: {}); the checks count only \
+             the cells a variable inverts",
+            invalid,
+            worst
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
     let failed: Vec<String> = checked.failed.iter().map(|f| f.0.clone()).collect();
     space::leave_out(&mut space, &failed);
     space.notes.extend(
