@@ -95,7 +95,19 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         a.allow_infeasible,
         "run",
     )?;
-    let ev = study.evaluate_with_progress(&x, &mut |p| eprintln!("[run] {p}"))?;
+    let ev = match study.evaluate_with_progress(&x, &mut |p| eprintln!("[run] {p}")) {
+        Ok(ev) => ev,
+        Err(e @ aeroshape::study::StudyError::Deform(deform::Error::Inverted { .. })) => {
+            return Err(match write_failed(&study, &x, &a.output) {
+                Ok(f) => anyhow::Error::new(e).context(format!(
+                    "{}: the design inverts cells; wrote {f}",
+                    a.case.display()
+                )),
+                Err(w) => anyhow::Error::new(e).context(format!("(and {w:#})")),
+            });
+        }
+        Err(e) => return Err(e.into()),
+    };
     let r = &ev.report;
     let mut written = write_outputs(
         &a.output,
@@ -184,10 +196,69 @@ pub(crate) fn load_case(a: &RunArgs) -> anyhow::Result<Case> {
         "planform.png",
         "sections.png",
         "quality.png",
+        "failed.vtu",
+        "failed.json",
     ] {
         ensure_not_input(&a.output.join(n), &input_refs).map_err(anyhow::Error::msg)?;
     }
     Ok(case)
+}
+
+/// After an evaluation refused for inverted cells: the grid of the guard's last attempt as
+/// `dir/failed.vtu` (its quality field shows the cells) and `dir/failed.json` (the design
+/// vector, the inverted cells with their kind, quality, place and the variables that moved
+/// them, `Study::failed_grid`), each written atomically; the worst cells are printed.
+/// Returns what was written, in words.
+fn write_failed(study: &Study, x: &[f64], dir: &Path) -> anyhow::Result<String> {
+    eprintln!("[run] the design inverts cells: the failed grid and what moved its cells");
+    let f = study.failed_grid(x, 20)?;
+    let (vtu, json) = (dir.join("failed.vtu"), dir.join("failed.json"));
+    write_atomic(&vtu, |w| {
+        mesh::io::write(&f.grid, Format::from_path(&vtu).expect("vtu"), w)
+    })?;
+    #[derive(Serialize)]
+    struct Failed<'a> {
+        design: Vec<(&'a str, f64)>,
+        inverted: usize,
+        cells: &'a [aeroshape::study::failure::InvertedCell],
+    }
+    let names = study.registry().names();
+    let rec = Failed {
+        design: names.iter().copied().zip(x.iter().copied()).collect(),
+        inverted: f.count,
+        cells: &f.cells,
+    };
+    write_atomic(&json, |w| {
+        serde_json::to_writer_pretty(&mut *w, &rec).map_err(std::io::Error::other)?;
+        writeln!(w)
+    })?;
+    for c in f.cells.iter().take(5) {
+        let on_wall = c.nodes.iter().filter(|n| n.1).count();
+        eprintln!(
+            "[run]   cell {} ({}, q {:.3e}, was {:.3e}) at ({:.4}, {:.4}, {:.4}), {} of {} nodes on the wall; moved by {}",
+            c.cell,
+            c.kind,
+            c.quality[0],
+            c.quality[1],
+            c.centroid[0],
+            c.centroid[1],
+            c.centroid[2],
+            on_wall,
+            c.nodes.len(),
+            c.moved_by
+                .iter()
+                .take(3)
+                .map(|(n, s)| format!("{n} ({s:.2e})"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    Ok(format!(
+        "{} and {} ({} inverted cells)",
+        vtu.display(),
+        json.display(),
+        f.count
+    ))
 }
 
 /// Writes a run's files into `dir`, each to a temporary name then renamed: the deformed grid

@@ -137,7 +137,7 @@ fn deform_driver(
 ) -> Result<Deformed> {
     let d = Deformer::build(mesh, bc, sup, opts, progress)?;
     let values: Vec<[f64; 3]> = bc.displacements.iter().map(|e| e.1).collect();
-    let mut out = d.run(Prescribed::Displacements(&values), None, progress)?;
+    let mut out = d.run(Prescribed::Displacements(&values), None, false, progress)?;
     out.report.setup_steps = d.steps.clone();
     let s = &mut out.report.seconds;
     s.setup += d.setup.setup;
@@ -450,6 +450,7 @@ impl<'s> Deformer<'s> {
         self.run(
             Prescribed::Displacements(displacements),
             warm_start,
+            false,
             &mut |_, _, _| {},
         )
     }
@@ -467,6 +468,25 @@ impl<'s> Deformer<'s> {
         self.run(
             Prescribed::Positions(positions),
             warm_start,
+            false,
+            &mut |_, _, _| {},
+        )
+    }
+
+    /// [`Deformer::deform_to`], but a grid that the quality guard would refuse (cells
+    /// inverted beyond the baseline's after every increment) is returned rather than
+    /// [`Error::Inverted`]: the last attempt's grid and its cell quality, with the count in
+    /// the report's notes, whatever `allow_inverted` says. For showing what failed (`aeroshape
+    /// run` writes it as `failed.vtu`), never for going on with.
+    pub fn deform_to_keeping_inverted(
+        &self,
+        positions: &[[f64; 3]],
+        warm_start: Option<&Deformed>,
+    ) -> Result<Deformed> {
+        self.run(
+            Prescribed::Positions(positions),
+            warm_start,
+            true,
             &mut |_, _, _| {},
         )
     }
@@ -481,6 +501,7 @@ impl<'s> Deformer<'s> {
         self.run(
             Prescribed::Displacements(displacements),
             warm_start,
+            false,
             progress,
         )
     }
@@ -512,6 +533,7 @@ impl<'s> Deformer<'s> {
         &self,
         values: Prescribed,
         warm_start: Option<&Deformed>,
+        keep_inverted: bool,
         progress: &mut dyn FnMut(&str, usize, usize),
     ) -> Result<Deformed> {
         // `exact`: the positions the prescribed nodes must end at, when given.
@@ -555,8 +577,8 @@ impl<'s> Deformer<'s> {
             }
             w => w.map(|w| &w.state),
         };
-        let mut d =
-            guard::run(self, &bc, warm, exact, progress).map_err(|e| e.renumbered(&self.inv))?;
+        let mut d = guard::run(self, &bc, warm, exact, keep_inverted, progress)
+            .map_err(|e| e.renumbered(&self.inv))?;
         d.state.values = bc.displacements.iter().map(|e| e.1).collect();
         d.state.exact = exact.map(<[[f64; 3]]>::to_vec);
         d.report.far_field = self.far_field(&d.coords);

@@ -32,12 +32,14 @@ fn worst_cells(mesh: &Mesh, q: &[f64], k: usize) -> String {
 
 /// The attempts of the guard for the set-up `d` and the call's boundary conditions `bc` (solver
 /// numbering); `warm`: the state of an earlier result, `exact`: the prescribed nodes' final
-/// positions when the call gave positions.
+/// positions when the call gave positions; `keep_inverted`: return an inverted grid as
+/// `allow_inverted` does.
 pub(crate) fn run(
     d: &Deformer,
     bc: &BoundaryConditions,
     warm: Option<&SolverState>,
     exact: Option<&[[f64; 3]]>,
+    keep_inverted: bool,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Deformed> {
     let ctx = Context {
@@ -118,7 +120,7 @@ pub(crate) fn run(
         }
         if after.n_nonpositive > before.n_nonpositive {
             let worst = worst_cells(mesh, &q1, 5);
-            if !opts.allow_inverted {
+            if !(opts.allow_inverted || keep_inverted) {
                 return Err(Error::Inverted {
                     count: after.n_nonpositive,
                     increments: inc,

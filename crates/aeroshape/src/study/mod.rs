@@ -64,6 +64,7 @@ use crate::case::Case;
 pub mod distributed;
 pub mod error;
 mod evaluate;
+pub mod failure;
 pub mod linearise;
 pub mod report;
 mod setup;
