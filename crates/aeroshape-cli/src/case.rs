@@ -1,6 +1,6 @@
-//! `aeroshape case init`: a ready case from the user's own CAD and grid
-//! (`aeroshape::init`): markers by shape, the wall tied to the geometry, the default design
-//! space with bounds checked by the study.
+//! `aeroshape case init`: a ready case from the user's own CAD and grid (`aeroshape::init`):
+//! markers by shape, the wall tied to the geometry, the default design space with bounds
+//! checked by the study; and the dispatch of `case check` ([`crate::case_check`]).
 
 use std::path::PathBuf;
 
@@ -18,6 +18,12 @@ pub enum CaseCmd {
     /// (parametric wall nodes) and prints the design variables (wing master, fuselage
     /// waist, bumps) with their checked bounds.
     Init(InitArgs),
+    /// Check the design box as a whole: the corners and a Latin hypercube through the chain;
+    /// where one inverts a cell or fails, the box is shrunk about the initial design until
+    /// every sample passes. Prints the bounds before and after, the failing samples and the
+    /// variables that fail together; optionally writes the case with the shrunk bounds, a
+    /// picture of the valid fraction per pair of variables and every sample as JSON.
+    Check(crate::case_check::CheckArgs),
 }
 
 /// Arguments of `case init`.
@@ -40,12 +46,18 @@ pub struct InitArgs {
     /// error. An imported IGES or STEP file always gets them.
     #[arg(long)]
     pub assign_control_nodes: bool,
+    /// Latin-hypercube samples of the box checked as a whole, besides up to as many corners
+    /// (`case check` with its defaults does more); the bounds shrink until all pass. 0
+    /// skips the check.
+    #[arg(long, value_name = "N", default_value_t = 8)]
+    pub box_samples: usize,
 }
 
 /// Runs a `case` subcommand.
 pub fn run(cmd: CaseCmd) -> anyhow::Result<()> {
     match cmd {
         CaseCmd::Init(a) => init(&a),
+        CaseCmd::Check(a) => crate::case_check::check(&a),
     }
 }
 
@@ -69,6 +81,11 @@ fn init(a: &InitArgs) -> anyhow::Result<()> {
     let opts = InitOptions {
         rel_tol: a.rel_tol,
         assign_control_nodes: a.assign_control_nodes,
+        box_check: (a.box_samples > 0).then(|| aeroshape::boxcheck::BoxCheckOptions {
+            samples: a.box_samples,
+            max_corners: a.box_samples,
+            ..InitOptions::default().box_check.unwrap_or_default()
+        }),
         ..InitOptions::default()
     };
     let r = init_case(&cad.db, &grid, &cad.tolerances, &a.output, &opts).map_err(|e| match e {
@@ -141,6 +158,31 @@ fn init(a: &InitArgs) -> anyhow::Result<()> {
             v.min_quality[0],
             v.min_quality[1]
         );
+    }
+    match &r.box_check {
+        Some(b) if b.scale == 1.0 => outln!(
+            "together: {} of {} samples of the box (corners, Latin hypercube) valid; bounds kept",
+            b.valid,
+            b.samples
+        ),
+        Some(b) if b.scale > 0.0 => outln!(
+            "together: {} of {} samples of the box valid; in the case, bounds multiplied by: {}",
+            b.valid,
+            b.samples,
+            b.scales
+                .iter()
+                .filter(|(_, s)| *s < 1.0)
+                .map(|(n, s)| format!("{n} {s}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        Some(b) => outln!(
+            "together: {} of {} samples of the box valid, and it still fails when shrunk; see \
+             the note",
+            b.valid,
+            b.samples
+        ),
+        None => {}
     }
     for n in &r.notes {
         outln!("note: {n}");

@@ -22,6 +22,7 @@ macro_rules! outln {
 }
 
 mod case;
+mod case_check;
 mod deform;
 #[cfg(feature = "mpi")]
 mod deform_mpi;

@@ -18,7 +18,7 @@ use plotters::prelude::*;
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
-fn register_font() {
+pub(crate) fn register_font() {
     REGISTER.call_once(|| {
         // The embedded font is valid; a failure would only mean text is not drawn.
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);

@@ -373,3 +373,147 @@ fn init_refuses_a_geometry_without_control_nodes() {
     );
     assert!(!dir.path().join("case/case.ron").exists());
 }
+
+/// `case check` on the default case: the whole box fails (its nose droop and stretch crush
+/// the same cells together, issue 44), the box is shrunk, and the case written with the
+/// shrunk bounds loads with every bound scaled about the initial design by its variable's
+/// scale in the JSON (each between the common scale printed and 1);
+/// the JSON holds every sample and the picture is a PNG.
+#[test]
+fn check_shrinks_the_default_box_and_writes_the_shrunk_case() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = root().join("fixtures/cases/default/case.ron");
+    let (shrunk, json, png) = (
+        dir.path().join("shrunk.ron"),
+        dir.path().join("box.json"),
+        dir.path().join("pairs.png"),
+    );
+    let out = ok(&bin()
+        .args(["case", "check"])
+        .arg(&case)
+        .args(["--samples", "4", "--corners", "2", "--shrink-steps", "2"])
+        .arg("-o")
+        .arg(&shrunk)
+        .arg("--json")
+        .arg(&json)
+        .arg("--picture")
+        .arg(&png)
+        .output()
+        .unwrap());
+    assert!(out.contains("whole box: "), "{out}");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(
+        r["unit"].as_array().unwrap().len(),
+        6,
+        "2 corners + 4 samples"
+    );
+    let full = r["rounds"][0]["results"].as_array().unwrap();
+    assert!(
+        full.iter().any(|s| s["valid"] == false),
+        "the default box fails somewhere: {out}"
+    );
+    let scale = r["scale"].as_f64().unwrap();
+    assert!(scale > 0.0 && scale < 1.0, "{out}");
+    assert!(out.contains(&format!("common scale {scale:.4}")), "{out}");
+    let scales: Vec<f64> = r["scales"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_f64().unwrap())
+        .collect();
+    assert!(
+        scales.iter().all(|&s| (scale..=1.0).contains(&s)),
+        "{scales:?}"
+    );
+    let (a, b) = (
+        aeroshape::case::Case::load(&case).unwrap(),
+        aeroshape::case::Case::load(&shrunk).unwrap(),
+    );
+    let vars = |c: &aeroshape::case::Case| -> Vec<param::DesignVariable> {
+        c.parametrisation
+            .modifiers
+            .iter()
+            .flat_map(|m| m.variables())
+            .cloned()
+            .collect()
+    };
+    let (va, vb) = (vars(&a), vars(&b));
+    assert_eq!(va.len(), vb.len());
+    for ((x, y), s) in va.iter().zip(&vb).zip(&scales) {
+        for (l, m) in [(x.lower, y.lower), (x.upper, y.upper)] {
+            testkit::assert_close!(m, x.value + s * (l - x.value), rel = 1e-12, abs = 1e-15);
+        }
+    }
+    // the shrunk case runs from its own folder (paths made absolute)
+    ok(&bin().args(["param", "list"]).arg(&shrunk).output().unwrap());
+    assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
+}
+
+/// A design that inverts cells (a corner of the default box: the nose drooped and sheared,
+/// the top stretched forward and the bottom aft) exits 1 and leaves the failed grid and what
+/// moved its cells: `failed.json` names the cells with their kinds, and the nose variables
+/// first; `failed.vtu` holds the grid, in which the named tetrahedron's volume, computed
+/// here from its nodes, has turned negative from positive in the baseline.
+#[test]
+fn run_writes_the_failed_grid_and_the_variables_that_moved_its_cells() {
+    let dir = tempfile::tempdir().unwrap();
+    let dv = dir.path().join("corner.ron");
+    std::fs::write(
+        &dv,
+        "{\"twist\": 0.1, \"taper\": -0.3, \"sweep\": -0.8, \"dihedral\": 0.3, \
+         \"thick_lower\": 0.03, \"thick_upper\": -0.03, \"waist_bottom\": -0.2, \
+         \"waist_top\": -0.2, \"droop_bottom\": -0.3, \"droop_top\": -0.3, \
+         \"stretch_bottom\": -0.5, \"stretch_top\": 0.5}",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let case = root().join("fixtures/cases/default/case.ron");
+    let o = bin()
+        .arg("run")
+        .arg(&case)
+        .arg("--dv")
+        .arg(&dv)
+        .arg("-o")
+        .arg(&out)
+        .arg("--no-pictures")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("failed.vtu") && err.contains("inverted cells"),
+        "{err}"
+    );
+    let f: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("failed.json")).unwrap()).unwrap();
+    let cells = f["cells"].as_array().unwrap();
+    assert!(!cells.is_empty() && f["inverted"].as_u64().unwrap() >= cells.len() as u64);
+    let grid = mesh::io::read_path(&out.join("failed.vtu")).unwrap();
+    let base = mesh::io::read_path(&root().join("fixtures/cases/default/grid.msh")).unwrap();
+    let vol = |x: &[[f64; 3]], n: &[usize]| {
+        let e = |k: usize| [0, 1, 2].map(|c| x[n[k]][c] - x[n[0]][c]);
+        let (a, b, c) = (e(1), e(2), e(3));
+        a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+            + a[2] * (b[0] * c[1] - b[1] * c[0])
+    };
+    for c in cells {
+        assert!(c["quality"][0].as_f64().unwrap() <= 0.0, "{c}");
+        assert!(c["quality"][1].as_f64().unwrap() > 0.0, "{c}");
+        let first = c["moved_by"][0][0].as_str().unwrap();
+        assert!(
+            first.starts_with("stretch") || first.starts_with("droop"),
+            "{c}"
+        );
+        if c["kind"] == "tetra" {
+            let n: Vec<usize> = c["nodes"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v[0].as_u64().unwrap() as usize)
+                .collect();
+            assert!(vol(&base.coords, &n) > 0.0, "{c}");
+            assert!(vol(&grid.coords, &n) <= 0.0, "{c}");
+        }
+    }
+}

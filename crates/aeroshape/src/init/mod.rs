@@ -25,6 +25,7 @@ use geom_db::GeomDb;
 use mesh::Mesh;
 use serde::Serialize;
 
+use crate::boxcheck::BoxCheckOptions;
 use crate::case::{CASE_FORMAT_VERSION, Case};
 use crate::fsio::write_atomic;
 use crate::study::{Study, StudyError};
@@ -145,6 +146,9 @@ pub struct InitOptions {
     /// Make control nodes (`GeomDb::assign_control_nodes`) when the geometry has none,
     /// instead of failing with [`InitError::NoControlNodes`].
     pub assign_control_nodes: bool,
+    /// The box checked as a whole after the variables' own checks ([`crate::boxcheck`]):
+    /// its samples and how far it may shrink; `None` skips it.
+    pub box_check: Option<BoxCheckOptions>,
 }
 
 impl Default for InitOptions {
@@ -154,8 +158,32 @@ impl Default for InitOptions {
             bound_rel: 0.01,
             max_halvings: 8,
             assign_control_nodes: false,
+            box_check: Some(BoxCheckOptions {
+                samples: 8,
+                max_corners: 8,
+                seed: 1,
+                shrink_steps: 3,
+                grow_steps: 1,
+            }),
         }
     }
+}
+
+/// What the check of the box as a whole found at `case init` ([`crate::boxcheck`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BoxSummary {
+    /// Samples evaluated in the whole box (corners and Latin hypercube).
+    pub samples: usize,
+    /// How many of them gave a valid grid.
+    pub valid: usize,
+    /// The common scale at which every sample passed (1: the whole box passed; 0: even the
+    /// smallest box tried failed).
+    pub scale: f64,
+    /// Each variable's scale once grown back from the common one (its bounds in the case
+    /// are multiplied by it).
+    pub scales: Vec<(String, f64)>,
+    /// The pairs of variables failing together, worst first: names and valid fraction.
+    pub failing_together: Vec<(String, String, f64)>,
 }
 
 /// What `case init` found and wrote.
@@ -179,6 +207,8 @@ pub struct InitReport {
     pub case: PathBuf,
     /// Candidate variables left out, and why.
     pub notes: Vec<String>,
+    /// The check of the box as a whole (`None`: not asked for).
+    pub box_check: Option<BoxSummary>,
 }
 
 /// Makes the case in `dir` from `db` (whose CAD gave the tolerance sources `cad`) and the
@@ -316,6 +346,45 @@ pub fn init_case(
             }
         }
     }
+    let box_check = match &opts.box_check {
+        Some(bo) => Some(check_box_together(&mut case, &case_path, bo)?),
+        None => None,
+    };
+    if let Some(b) = box_check.as_ref().filter(|b| b.scale == 0.0) {
+        space.notes.push(format!(
+            "the variables together: {} of {} samples of the box gave a valid grid, and the \
+             box still fails at {} of its size; the bounds are left as checked one by one \
+             (run `aeroshape case check` on the case for the failing samples)",
+            b.valid,
+            b.samples,
+            0.5f64.powi(opts.box_check.as_ref().map_or(0, |o| o.shrink_steps) as i32)
+        ));
+    }
+    if let Some(b) = box_check
+        .as_ref()
+        .filter(|b| b.scale > 0.0 && b.scale < 1.0)
+    {
+        let shrunk: Vec<String> = b
+            .scales
+            .iter()
+            .filter(|(_, s)| *s < 1.0)
+            .map(|(n, s)| format!("{n} × {s}"))
+            .collect();
+        space.notes.push(format!(
+            "the variables together: {} of {} samples of the box (corners and a Latin \
+             hypercube) gave a valid grid; bounds multiplied so that all pass: {}{}",
+            b.valid,
+            b.samples,
+            shrunk.join(", "),
+            match b.failing_together.first() {
+                Some((i, j, f)) => format!(
+                    " (worst pair: {i} with {j}, {:.0} % valid far out in both)",
+                    100.0 * f
+                ),
+                None => String::new(),
+            }
+        ));
+    }
     let text = format!(
         "// Made by `aeroshape case init` (see docs/guide.md): markers by shape, wall tied to\n\
          // the geometry; per part of the wall a wing master (wing), the waist at the wing\n\
@@ -334,7 +403,48 @@ pub fn init_case(
         variables,
         case: case_path,
         notes: space.notes,
+        box_check,
     })
+}
+
+/// Checks the box of `case` (bounds already set variable by variable) as a whole and
+/// multiplies every bound by the scale at which all samples pass.
+fn check_box_together(
+    case: &mut Case,
+    case_path: &Path,
+    opts: &BoxCheckOptions,
+) -> Result<BoxSummary, InitError> {
+    let study = Study::new(case.clone(), case_path)?;
+    let check = crate::boxcheck::check_box(&study, opts, &mut |_, _, _| {});
+    let full = &check.rounds[0];
+    let names = &check.pairs.names;
+    let summary = BoxSummary {
+        samples: full.results.len(),
+        valid: full.results.iter().filter(|r| r.valid).count(),
+        scale: check.scale,
+        scales: names
+            .iter()
+            .cloned()
+            .zip(check.scales.iter().copied())
+            .collect(),
+        failing_together: check
+            .pairs
+            .failing_together()
+            .into_iter()
+            .map(|(i, j, f)| (names[i].clone(), names[j].clone(), f))
+            .collect(),
+    };
+    if check.scale > 0.0 && !check.whole_box() {
+        let bounds = check.bounds(&study);
+        for m in &mut case.parametrisation.modifiers {
+            for v in space::variables_mut(m) {
+                if let Some(k) = names.iter().position(|n| *n == v.name) {
+                    (v.lower, v.upper) = bounds[k];
+                }
+            }
+        }
+    }
+    Ok(summary)
 }
 
 /// The diagonal of the box of the `wall` markers' nodes.
