@@ -10,7 +10,12 @@
 //!    otherwise): meshio reads `deformed.vtu` and `deformed.su2` with the same node count
 //!    and coordinates (its MSH reader has no parametric nodes); Gmsh opens `deformed.msh`
 //!    with the node count of `deformed.su2`.
-//! 4. The distributed deformation under `mpirun` (`regress_mpi`; skipped without MPI).
+//! 4. The default case's checked box (`fixtures/cases/default/case_box.ron`, written by
+//!    `aeroshape case check`): 40 design vectors drawn uniformly in it, each through
+//!    `aeroshape run`, every cell of every deformed grid checked by corner Jacobians in
+//!    numpy (`fixtures/cases/box_sample.py`, not aeroshape's quality code); skipped with a
+//!    note without meshio.
+//! 5. The distributed deformation under `mpirun` (`regress_mpi`; skipped without MPI).
 //!
 //! Fails with one line per drifted quantity: case, name, value, reference, tolerance.
 
@@ -211,6 +216,7 @@ pub fn run(root: &Path, args: &[String]) -> Result<(), String> {
         }
         round_trips(&out, case, &mut drift);
     }
+    checked_box(root, &mut drift);
     if args.iter().any(|a| a == "--skip-ignored-tests") {
         println!("regress: ignored tests skipped (--skip-ignored-tests)");
     } else {
@@ -283,5 +289,40 @@ if len(tags) != int(ref):
             )),
             Err(e) => drift.push(format!("{case}: {tool}: {e}")),
         }
+    }
+}
+
+/// Step 4 of the module doc: the checked box of the default case by the independent check.
+fn checked_box(root: &Path, drift: &mut Vec<String>) {
+    let have = Command::new("python3")
+        .args(["-c", "import meshio, numpy"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !have {
+        println!("default: checked box skipped (meshio not installed)");
+        return;
+    }
+    let cli = root.join("target/release/aeroshape");
+    let work = root.join("target/regress/box");
+    let o = Command::new("python3")
+        .arg(root.join("fixtures/cases/box_sample.py"))
+        .arg(root.join("fixtures/cases/default/case_box.ron"))
+        .args(["--n", "40", "--seed", "7", "--cli"])
+        .arg(&cli)
+        .arg("--work")
+        .arg(&work)
+        .output();
+    match o {
+        Ok(o) => {
+            let text = String::from_utf8_lossy(&o.stdout);
+            let last = text.lines().last().unwrap_or("?");
+            if o.status.success() {
+                println!("default: {last}");
+            } else {
+                drift.push(format!("default: checked box: {last}"));
+            }
+        }
+        Err(e) => drift.push(format!("default: checked box: cannot run python3: {e}")),
     }
 }
