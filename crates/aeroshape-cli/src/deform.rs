@@ -333,15 +333,33 @@ fn print_summary(r: &deform::DeformReport, output: &Path) -> std::io::Result<()>
     print_tail(
         [&r.quality_before, &r.quality_after],
         Some(&r.far_field),
+        r.first_layer.as_ref(),
         output,
     )
 }
 
+/// The line of the first layer at the moving wall (`deform::layer`).
+pub(crate) fn first_layer_line(l: &deform::layer::FirstLayer) -> String {
+    format!(
+        "first layer ({} wall nodes): height ratio {:.6} to {:.6}{}, wall-normal edges turned at most {:.3e} rad{}",
+        l.nodes,
+        l.height_ratio[0],
+        l.height_ratio[1],
+        l.worst_height_node
+            .map_or(String::new(), |v| format!(" (worst node {v})")),
+        l.max_turn,
+        l.worst_turn_node
+            .map_or(String::new(), |v| format!(" (node {v})"))
+    )
+}
+
 /// The summary's lines after its first, shared with the distributed command: the cell
-/// quality before and after, the far field (when measured) and the file written.
+/// quality before and after, the far field and the first layer (when measured) and the
+/// file written.
 pub(crate) fn print_tail(
     q: [&mesh::quality::Summary; 2],
     far: Option<&deform::FarField>,
+    layer: Option<&deform::layer::FirstLayer>,
     output: &Path,
 ) -> std::io::Result<()> {
     outln!(
@@ -364,6 +382,9 @@ pub(crate) fn print_tail(
             f.node.map_or(String::new(), |v| format!(" (node {v})")),
             f.wall_max_displacement
         );
+    }
+    if let Some(l) = layer {
+        outln!("{}", first_layer_line(l));
     }
     outln!("wrote {}", output.display());
     Ok(())

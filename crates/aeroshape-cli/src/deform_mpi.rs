@@ -299,7 +299,7 @@ fn summary(
         r.increments,
         r.residual
     );
-    crate::deform::print_tail([&q[0], &q[1]], r.far_field.as_ref(), output)?;
+    crate::deform::print_tail([&q[0], &q[1]], r.far_field.as_ref(), None, output)?;
     Ok(())
 }
 

@@ -164,6 +164,14 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
             f.wall_max_displacement
         );
     }
+    if let Some(l) = r
+        .deform
+        .report
+        .as_ref()
+        .and_then(|d| d.first_layer.as_ref())
+    {
+        outln!("{}", crate::deform::first_layer_line(l));
+    }
     for w in &written {
         outln!("wrote {w}");
     }

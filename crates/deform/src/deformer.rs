@@ -529,6 +529,25 @@ impl<'s> Deformer<'s> {
         }
     }
 
+    /// The first layer at the moving boundary of the grid `coords` (solver numbering;
+    /// [`crate::layer`]).
+    fn first_layer(&self, coords: &[[f64; 3]]) -> Option<crate::layer::FirstLayer> {
+        let moving: Vec<bool> = self
+            .cls
+            .roles
+            .iter()
+            .map(|r| matches!(r, NodeRole::Rigid(_) | NodeRole::Displaced(_)))
+            .collect();
+        let id = |v: usize| {
+            if self.perm.is_some() {
+                self.inv[v]
+            } else {
+                v as u32
+            }
+        };
+        crate::layer::first_layer(&self.mesh, &self.adj, &moving, coords, &id)
+    }
+
     fn run(
         &self,
         values: Prescribed,
@@ -582,6 +601,7 @@ impl<'s> Deformer<'s> {
         d.state.values = bc.displacements.iter().map(|e| e.1).collect();
         d.state.exact = exact.map(<[[f64; 3]]>::to_vec);
         d.report.far_field = self.far_field(&d.coords);
+        d.report.first_layer = self.first_layer(&d.coords);
         if let Some(perm) = &self.perm {
             d.coords = perm.iter().map(|&p| d.coords[p as usize]).collect();
             for (v, _) in d.supports.iter_mut() {

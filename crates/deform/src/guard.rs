@@ -165,6 +165,7 @@ pub(crate) fn run(
             setup_steps: Vec::new(),
             notes,
             far_field: FarField::default(),
+            first_layer: None,
         };
         let Attempt { cur, params } = st;
         let supports = cls

@@ -60,6 +60,7 @@ pub mod error;
 pub mod generate;
 mod guard;
 mod increment;
+pub mod layer;
 pub mod linearise;
 mod operator;
 pub mod options;

@@ -119,6 +119,10 @@ pub struct DeformReport {
     pub notes: Vec<String>,
     /// How far the motion reaches: the largest displacement far from the moving boundary.
     pub far_field: FarField,
+    /// The first layer of cells at the moving wall: height ratios and the turn of the
+    /// wall-normal edges ([`crate::layer`]; `None` when no moving node has a neighbour off
+    /// the wall).
+    pub first_layer: Option<crate::layer::FirstLayer>,
 }
 
 /// The largest displacement in the far field: among the nodes whose distance from the
