@@ -486,6 +486,34 @@ impl PyStudy {
         })
     }
 
+    /// What a design that inverts cells did (`aeroshape::study::failure`): a dict with
+    /// "count" (cells inverted beyond the baseline's), "cells" (the `max_cells` worst: cell,
+    /// kind, quality [after, baseline], centroid, nodes as [node, on the wall], and
+    /// "moved_by", the variables' shares, largest first), "volume_coordinates" (the grid of
+    /// the guard's last attempt, `n_nodes × 3`) and "cell_quality". For the `x` that made
+    /// `evaluate` raise `EvaluationError` with inverted cells; `x` is checked as there.
+    #[pyo3(signature = (x, *, max_cells=20, allow_infeasible=false, allow_out_of_bounds=false))]
+    fn failed_grid<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        max_cells: usize,
+        allow_infeasible: bool,
+        allow_out_of_bounds: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let x = arrays::read_vector(x, "x")?;
+        self.check_design(py, &x, allow_infeasible, allow_out_of_bounds)?;
+        let f = py
+            .detach(|| self.inner.failed_grid(&x, max_cells))
+            .map_err(|e| errors::from_study(py, &e))?;
+        let d = pyo3::types::PyDict::new(py);
+        d.set_item("count", f.count)?;
+        d.set_item("cells", arrays::to_python(py, &f.cells)?)?;
+        d.set_item("volume_coordinates", arrays::coords(py, &f.grid.coords))?;
+        d.set_item("cell_quality", arrays::vector(py, &f.cell_quality))?;
+        Ok(d.into_any())
+    }
+
     /// Evaluates the chain at `x` and linearises every phase there (the deformation started
     /// cold, so the result belongs to x alone): the returned `Linearisation` gives exact
     /// `jvp`/`vjp` products at x as often as asked. `x` is checked as in `evaluate`.

@@ -77,3 +77,26 @@ def test_lbfgsb_recovers_a_hidden_vector_in_the_box(boxed, seed):
         f"error / width per variable {dict(zip(study.names, err.round(6)))}")
     print(f"L-BFGS-B: {res.nit} iterations, {len(calls)} evaluations, f {calls[0]:.3e} -> "
           f"{calls[-1]:.3e}, largest error {err.max():.2e} of the width")
+
+
+def test_failed_grid_names_the_cells_and_the_variables():
+    """A corner of the default case's whole box inverts cells at the nose: evaluate raises,
+    failed_grid gives the grid of the guard's last attempt, whose named cells are inverted
+    there (their quality in the returned field ≤ 0, > 0 in the baseline's), and the nose
+    variables first among those that moved them."""
+    study = aeroshape.Study(DEFAULT / "case.ron")
+    corner = {"twist": 0.1, "taper": -0.3, "sweep": -0.8, "dihedral": 0.3,
+              "thick_lower": 0.03, "thick_upper": -0.03, "waist_bottom": -0.2,
+              "waist_top": -0.2, "droop_bottom": -0.3, "droop_top": -0.3,
+              "stretch_bottom": -0.5, "stretch_top": 0.5}
+    x = study.vector(corner)
+    with pytest.raises(aeroshape.EvaluationError, match="inverted cells"):
+        study.evaluate(x)
+    f = study.failed_grid(x)
+    assert f["count"] >= len(f["cells"]) >= 1
+    assert f["volume_coordinates"].shape == (study.n_nodes, 3)
+    q0 = study.evaluate(study.initial).cell_quality
+    for c in f["cells"]:
+        assert f["cell_quality"][c["cell"]] <= 0.0 < q0[c["cell"]]
+        assert c["quality"][0] == f["cell_quality"][c["cell"]]
+        assert c["moved_by"][0][0].split("_")[0] in ("stretch", "droop"), c

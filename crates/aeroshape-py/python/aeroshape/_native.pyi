@@ -149,6 +149,21 @@ class Study:
         phases (param, model update, surface grid, deform) starts; without it, progress goes
         to DEBUG records of the logger ``"aeroshape"``.
         """
+    def failed_grid(
+        self,
+        x: _ArrayLike,
+        *,
+        max_cells: int = 20,
+        allow_infeasible: bool = False,
+        allow_out_of_bounds: bool = False,
+    ) -> dict[str, Any]:
+        """What a design that inverts cells did: ``count`` (cells inverted beyond the
+        baseline's), ``cells`` (the ``max_cells`` worst: ``cell``, ``kind``, ``quality``
+        [after, baseline], ``centroid``, ``nodes`` as [node, on the wall], ``moved_by``: the
+        design variables' shares in the cell's distortion, largest first),
+        ``volume_coordinates`` (the grid of the quality guard's last attempt) and
+        ``cell_quality``. For the ``x`` that made :meth:`evaluate` raise
+        :class:`EvaluationError` with inverted cells."""
     def forget_warm_start(self) -> None:
         """Makes the next evaluation start its solves from the baseline rather than from
         the previous solution."""
