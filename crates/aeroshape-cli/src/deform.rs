@@ -58,9 +58,14 @@ pub struct DeformArgs {
     /// `aeroshape mesh`: entity tag = component id + 1), corners frozen.
     #[arg(long, value_name = "GEOM.ron")]
     pub geometry: Option<PathBuf>,
-    /// Marker held fixed (the default for markers not named; repeatable).
+    /// Marker held fixed (the default for markers not named, except symmetry planes found
+    /// by shape; repeatable).
     #[arg(long, value_name = "MARKER")]
     pub fixed: Vec<String>,
+    /// Hold every marker not named fixed, symmetry planes included (by default a marker
+    /// not named that is a plane touching the moving markers slides on it).
+    #[arg(long)]
+    pub fix_planes: bool,
     /// Linear solver: `pcg` (conjugate gradients with multigrid), `jacobi` (the paper's
     /// point iteration, Eq. 22), `pcg-jacobi` (conjugate gradients, Jacobi preconditioner).
     #[arg(long, default_value_t = SolverKind::PcgMultigrid,
@@ -261,6 +266,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     // a node of a fixed marker (named by --fixed or by nothing) never moves, even where the
     // marker meets a sliding one
     add_displacements(&args, &m, &mut request)?;
+    slide_symmetry_planes(&args, &m, &mut request)?;
     let mut progress = |phase: &str, done: usize, total: usize| {
         if let Some(b) = &bar {
             b.set_message(format!("{phase} ({done}/{total} increments)"));
@@ -428,6 +434,31 @@ pub(crate) fn add_displacements(
     };
     aeroshape::precedence::hold_fixed_nodes(m, request);
     Ok(())
+}
+
+/// Unless `--fix-planes`: the markers not named that are symmetry planes by their shape
+/// (`deform::Request::symmetry_planes`) slide on their planes, each said in a note; then the
+/// fixed markers' nodes where they meet them are held again (`add_displacements`).
+pub(crate) fn slide_symmetry_planes(
+    args: &DeformArgs,
+    m: &mesh::Mesh,
+    request: &mut deform::Request,
+) -> anyhow::Result<()> {
+    if args.fix_planes {
+        return Ok(());
+    }
+    let planes = request.symmetry_planes(m);
+    if planes.is_empty() {
+        return Ok(());
+    }
+    for (name, dev) in &planes {
+        eprintln!(
+            "note: marker {name} slides on its plane (not named; a plane touching the moving \
+             markers, nodes within {dev:.1e} of it); --fixed {name} or --fix-planes holds it"
+        );
+        request.slide.push(name.clone());
+    }
+    add_displacements(args, m, request)
 }
 
 fn aeroshape_check(out: &Path, inputs: &[&Path]) -> anyhow::Result<()> {

@@ -56,6 +56,7 @@ fn read(
         .transpose()?;
     let mut request = request.clone();
     add_displacements(args, &m, &mut request)?;
+    crate::deform::slide_symmetry_planes(args, &m, &mut request)?;
     let bc = request.boundary_conditions(&m, supports.as_ref());
     Ok((m, bc, supports.map_or_else(Vec::new, |s| s.nodes)))
 }

@@ -97,6 +97,48 @@ impl Request {
         }
     }
 
+    /// The markers of `mesh` that this request does not name and that are symmetry planes
+    /// by their shape: every node within `1e-9` of the grid's box diagonal of the plane
+    /// fitted to the marker, and at least one node shared with a rigid marker or given a
+    /// non-zero displacement (so a plane of a far-field box, which the moving boundary does not
+    /// touch, stays fixed). Returns each with its nodes' largest distance from its plane.
+    /// A front end slides them ([`Request::slide`]) unless told to fix them.
+    pub fn symmetry_planes(&self, mesh: &Mesh) -> Vec<(String, f64)> {
+        let named: HashSet<&str> = self
+            .rigid
+            .iter()
+            .chain(&self.slide)
+            .chain(&self.fixed)
+            .map(String::as_str)
+            .collect();
+        let mut moving: HashSet<u32> = self
+            .displacements
+            .iter()
+            .filter(|d| d.1 != [0.0; 3])
+            .map(|d| d.0)
+            .collect();
+        for r in &self.rigid {
+            if let Some(mk) = mesh.marker(r) {
+                moving.extend(mk.elements.node_set());
+            }
+        }
+        let tol = 1e-9 * mesh.bbox_diagonal();
+        let dim = if mesh.dim == 2 { 2 } else { 3 };
+        mesh.markers
+            .iter()
+            .filter(|mk| !named.contains(mk.name.as_str()))
+            .filter_map(|mk| {
+                let nodes = mk.elements.node_set();
+                if nodes.len() < 3 || !nodes.iter().any(|v| moving.contains(v)) {
+                    return None;
+                }
+                let pts: Vec<[f64; 3]> = nodes.iter().map(|&v| mesh.coords[v as usize]).collect();
+                let (_, _, dev) = crate::bc::fit_plane(&pts, dim);
+                (dev <= tol).then(|| (mk.name.clone(), dev))
+            })
+            .collect()
+    }
+
     /// The boundary conditions on `mesh`: rigid markers, then sliding markers (on the
     /// supports when `supports` classifies every node of the marker, else on its plane),
     /// then fixed markers, and the displacements.

@@ -494,3 +494,71 @@ fn openfoam_case_in_openfoam_case_out_with_points_only_changed() {
         .unwrap();
     assert!(!o.status.success());
 }
+
+/// A symmetry plane not named is found by its shape and slides (issue 43): a 2° pitch of
+/// the default case's wing and fuselage keeps every cell valid, with a note naming the
+/// marker, and the symmetry nodes stay in their plane (y = 0) while some of them move; with
+/// `--fix-planes` the same motion inverts cells at the root and is refused, exit 1.
+#[test]
+fn a_symmetry_plane_found_by_shape_slides_unless_fixed() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = crate::case::root().join("fixtures/cases/default/grid.msh");
+    let out = dir.path().join("pitched.su2");
+    let args = [
+        "--rigid",
+        "wing",
+        "--rigid",
+        "fuselage",
+        "--rotate-deg",
+        "2",
+        "--axis-point",
+        "4,0,0",
+        "--axis-dir",
+        "0,1,0",
+    ];
+    let o = bin()
+        .arg("deform")
+        .arg(&grid)
+        .arg("-o")
+        .arg(&out)
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("note: marker symmetry slides on its plane"),
+        "{err}"
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("inverted 0 → 0"), "{stdout}");
+    let (a, b) = (
+        mesh::io::read_path(&grid).unwrap(),
+        mesh::io::read_path(&out).unwrap(),
+    );
+    let sym = a.marker("symmetry").unwrap().elements.node_set();
+    let moved = sym
+        .iter()
+        .filter(|&&v| a.coords[v as usize] != b.coords[v as usize])
+        .count();
+    assert!(moved > 100, "{moved} symmetry nodes moved");
+    for &v in &sym {
+        let y = (b.coords[v as usize][1], a.coords[v as usize][1]);
+        assert!(
+            (y.0 - y.1).abs() <= 1e-12 * a.bbox_diagonal(),
+            "node {v} left its plane: {y:?}"
+        );
+    }
+    let o = bin()
+        .arg("deform")
+        .arg(&grid)
+        .arg("-o")
+        .arg(dir.path().join("fixed.su2"))
+        .args(args)
+        .arg("--fix-planes")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("inverted cells"));
+    assert!(!dir.path().join("fixed.su2").exists());
+}
