@@ -60,8 +60,9 @@ impl Study {
         Ok(measure_all(&self.db, &self.case.constraints)?)
     }
 
-    /// The updated model at `x` and the control nodes it was updated from.
-    fn model_at(&self, x: &[f64]) -> Result<GeomDb> {
+    /// The model updated to `x` (param, then the model update; no grid), the model the
+    /// constraints are measured on.
+    pub fn updated_model(&self, x: &[f64]) -> Result<GeomDb> {
         super::evaluate::check_length(&self.prepared, x)?;
         let points = self.prepared.apply(x)?;
         Ok(self.model.update(&points)?.0)
@@ -98,7 +99,7 @@ impl Study {
     /// The constraints at `x` as a table (value, initial, ratio, bounds).
     pub fn constraint_rows(&self, x: &[f64]) -> Result<Vec<ConstraintRow>> {
         let initial = self.initial_constraints()?;
-        let db = self.model_at(x)?;
+        let db = self.updated_model(x)?;
         let at = measure_all(&db, &self.case.constraints)?;
         Ok(self.rows(&at, &initial))
     }
