@@ -22,19 +22,16 @@
 //!   each patch split into 2^k × 2^k cells, k raised until two levels agree to 1e-12
 //!   relative; δA = Σ ∬ N·δN / |N| du dv on the final level.
 //!
-//! Each [`ConstraintSpec`] names one measure, whether it is taken relative to its value on
+//! The measures and their derivatives are `intersect::measure`'s (geometry only, below the
+//! grid); this module holds the case's specifications and names the values. Each
+//! [`ConstraintSpec`] names one measure, whether it is taken relative to its value on
 //! the initial model, and optional bounds on what is reported (the ratio when relative).
 
-use geom_db::GeomDb;
-use geom_db::SurfaceId;
-use geom_db::linearise::ModelTangent;
+use geom_db::{GeomDb, SurfaceId};
+use intersect::measure::{self, LineFailure, Measured as Kernel};
 use serde::{Deserialize, Serialize};
 
-mod integral;
-mod thickness;
-
-pub use integral::{area, volume};
-pub use thickness::{LineHit, Thickness, thickness};
+pub use intersect::measure::Thickness;
 
 /// One constraint of the case's `constraints` section.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -227,50 +224,33 @@ pub struct Measured {
     kernel: Kernel,
 }
 
-#[derive(Debug, Clone)]
-enum Kernel {
-    Thickness(Thickness),
-    Volume {
-        surfaces: Vec<(SurfaceId, f64)>,
-        axis: [f64; 3],
-    },
-    Area {
-        surfaces: Vec<(SurfaceId, usize)>,
-    },
-}
-
 impl Measured {
-    /// The value's derivative for the model perturbation `t` (a tangent of the model that
-    /// was measured, e.g. `intersect`'s `ModelLinearisation::jvp`).
-    pub fn tangent(&self, db: &GeomDb, t: &ModelTangent) -> Result<f64> {
-        if t.nodes.len() != db.control_nodes.len() {
+    /// The value's derivative for the perturbation `t` of the model `db` that was measured
+    /// (a tangent of the model update's linearisation, `ModelLinearisation::jvp`).
+    pub fn tangent(&self, db: &GeomDb, t: &geom_db::linearise::ModelTangent) -> Result<f64> {
+        if !Kernel::fits(db, t) {
             return Err(ConstraintError::TangentLayout {
                 name: self.name.clone(),
             });
         }
-        Ok(match &self.kernel {
-            Kernel::Thickness(th) => th.tangent(db, t),
-            Kernel::Volume { surfaces, axis } => integral::volume_tangent(db, surfaces, axis, t),
-            Kernel::Area { surfaces } => integral::area_tangent(db, surfaces, t),
-        })
+        Ok(self.kernel.tangent(db, t))
     }
 
     /// The transpose of [`tangent`](Self::tangent): adds `bar` times the value's gradient
-    /// with respect to the model to the cotangent `w` (e.g. `ModelLinearisation::zero_tangent`,
-    /// then its `vjp`).
-    pub fn add_cotangent(&self, db: &GeomDb, bar: f64, w: &mut ModelTangent) -> Result<()> {
-        if w.nodes.len() != db.control_nodes.len() {
+    /// with respect to the model to the cotangent `w` (of `ModelLinearisation::zero_tangent`
+    /// layout, then its `vjp`).
+    pub fn add_cotangent(
+        &self,
+        db: &GeomDb,
+        bar: f64,
+        w: &mut geom_db::linearise::ModelTangent,
+    ) -> Result<()> {
+        if !Kernel::fits(db, w) {
             return Err(ConstraintError::TangentLayout {
                 name: self.name.clone(),
             });
         }
-        match &self.kernel {
-            Kernel::Thickness(th) => th.add_cotangent(db, bar, w),
-            Kernel::Volume { surfaces, axis } => {
-                integral::volume_cotangent(db, surfaces, axis, bar, w)
-            }
-            Kernel::Area { surfaces } => integral::area_cotangent(db, surfaces, bar, w),
-        }
+        self.kernel.add_cotangent(db, bar, w);
         Ok(())
     }
 
@@ -280,6 +260,56 @@ impl Measured {
             Kernel::Thickness(th) => Some(th),
             _ => None,
         }
+    }
+}
+
+fn surface_label(db: &GeomDb, s: SurfaceId) -> String {
+    let name = &db.surface(s).name;
+    if name.is_empty() {
+        format!("{}", s.0)
+    } else {
+        format!("{} ({name})", s.0)
+    }
+}
+
+fn line_error(
+    f: LineFailure,
+    name: &str,
+    station: usize,
+    p: &[f64; 3],
+    d: &[f64; 3],
+    db: &GeomDb,
+    surfaces: &[SurfaceId],
+) -> ConstraintError {
+    let failed = if f.failed.is_empty() {
+        String::new()
+    } else {
+        let list: Vec<String> = f
+            .failed
+            .iter()
+            .take(3)
+            .map(|(s, r)| format!("surface {} residual {r:.3e}", surface_label(db, *s)))
+            .collect();
+        format!(
+            " ({} Newton solve(s) did not converge: {})",
+            f.failed.len(),
+            list.join(", ")
+        )
+    };
+    ConstraintError::Line {
+        name: name.to_string(),
+        station,
+        line: format!(
+            "at ({:.6}, {:.6}, {:.6}), the line along ({:.3}, {:.3}, {:.3})",
+            p[0], p[1], p[2], d[0], d[1], d[2]
+        ),
+        surfaces: surfaces
+            .iter()
+            .map(|s| surface_label(db, *s))
+            .collect::<Vec<_>>()
+            .join(", "),
+        hits: f.hits,
+        failed,
     }
 }
 
@@ -354,13 +384,13 @@ pub fn measure(db: &GeomDb, spec: &ConstraintSpec) -> Result<Vec<Measured>> {
                 .iter()
                 .enumerate()
                 .map(|(k, p)| {
-                    let th = thickness(db, surfaces, p, &d)
-                        .map_err(|e| e.into_error(name, k, p, &d, db, surfaces))?;
+                    let th = measure::thickness(db, surfaces, p, &d)
+                        .map_err(|e| line_error(e, name, k, p, &d, db, surfaces))?;
                     th.check_derivable(db)
-                        .map_err(|surface| ConstraintError::Tangent {
+                        .map_err(|s| ConstraintError::Tangent {
                             name: name.clone(),
                             station: k,
-                            surface,
+                            surface: surface_label(db, s),
                         })?;
                     Ok(Measured {
                         name: if single {
@@ -379,24 +409,20 @@ pub fn measure(db: &GeomDb, spec: &ConstraintSpec) -> Result<Vec<Measured>> {
             let m = unit(name, "axis", axis)?;
             let signed: Vec<(SurfaceId, f64)> =
                 surfaces.iter().map(|&s| (s, outward_sign(db, s))).collect();
+            let kernel = Kernel::volume(db, signed, m);
             Ok(vec![Measured {
                 name: name.clone(),
-                value: volume(db, &signed, &m),
-                kernel: Kernel::Volume {
-                    surfaces: signed,
-                    axis: m,
-                },
+                value: kernel.value(),
+                kernel,
             }])
         }
         Measure::Area { surfaces } => {
             check_surfaces(db, name, surfaces)?;
-            let (value, levels) = area(db, surfaces);
+            let kernel = Kernel::area(db, surfaces);
             Ok(vec![Measured {
                 name: name.clone(),
-                value,
-                kernel: Kernel::Area {
-                    surfaces: surfaces.iter().copied().zip(levels).collect(),
-                },
+                value: kernel.value(),
+                kernel,
             }])
         }
     }

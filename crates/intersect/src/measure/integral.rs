@@ -1,5 +1,5 @@
 //! Volume and area of a set of support surfaces by Gauss–Legendre rules on their patches
-//! (module doc of [`super`]), and their derivatives for a model perturbation.
+//! (docs/constraints.md), and their derivatives for a model perturbation.
 
 use geom_db::linearise::{ModelTangent, SurfaceTangent};
 use geom_db::prelude::Vector3;
@@ -77,7 +77,7 @@ pub fn volume(db: &GeomDb, surfaces: &[(SurfaceId, f64)], m: &[f64; 3]) -> f64 {
 }
 
 /// δV for the model perturbation `t`.
-pub(super) fn volume_tangent(
+pub(crate) fn volume_tangent(
     db: &GeomDb,
     surfaces: &[(SurfaceId, f64)],
     m: &[f64; 3],
@@ -105,7 +105,7 @@ pub(super) fn volume_tangent(
 }
 
 /// The transpose of [`volume_tangent`]: adds `bar` · dV/d(model) to `w`.
-pub(super) fn volume_cotangent(
+pub(crate) fn volume_cotangent(
     db: &GeomDb,
     surfaces: &[(SurfaceId, f64)],
     m: &[f64; 3],
@@ -165,7 +165,7 @@ pub fn area(db: &GeomDb, surfaces: &[SurfaceId]) -> (f64, Vec<usize>) {
 }
 
 /// δA for the model perturbation `t` (on the levels [`area`] chose).
-pub(super) fn area_tangent(db: &GeomDb, surfaces: &[(SurfaceId, usize)], t: &ModelTangent) -> f64 {
+pub(crate) fn area_tangent(db: &GeomDb, surfaces: &[(SurfaceId, usize)], t: &ModelTangent) -> f64 {
     let mut total = 0.0;
     for &(s, level) in surfaces {
         let surf = db.surface(s);
@@ -190,7 +190,7 @@ pub(super) fn area_tangent(db: &GeomDb, surfaces: &[(SurfaceId, usize)], t: &Mod
 }
 
 /// The transpose of [`area_tangent`]: adds `bar` · dA/d(model) to `w`.
-pub(super) fn area_cotangent(
+pub(crate) fn area_cotangent(
     db: &GeomDb,
     surfaces: &[(SurfaceId, usize)],
     bar: f64,

@@ -9,8 +9,6 @@ use geom_db::newton::line::LineSurface;
 use geom_db::prelude::{Point3, Vector3};
 use geom_db::{GeomDb, SurfaceId, Tolerances};
 
-use super::ConstraintError;
-
 /// Samples per patch side for the seeds of the line–surface Newton.
 const SAMPLES: usize = 8;
 
@@ -57,18 +55,19 @@ impl Thickness {
             .dt_of(h.uv[0], h.uv[1], dr)
     }
 
-    /// Err(surface name) where the line is tangent to the surface at an intersection.
-    pub(super) fn check_derivable(&self, db: &GeomDb) -> Result<(), String> {
+    /// Err(the surface) where the line is tangent to the surface (or the surface singular)
+    /// at an intersection: no derivative there.
+    pub fn check_derivable(&self, db: &GeomDb) -> Result<(), SurfaceId> {
         for h in [&self.lower, &self.upper] {
             if self.dt(db, h, &Vector3::zeros()).is_none() {
-                return Err(surface_label(db, h.surface));
+                return Err(h.surface);
             }
         }
         Ok(())
     }
 
     /// d(thickness) for the model perturbation `t`: dt_upper − dt_lower.
-    pub(super) fn tangent(&self, db: &GeomDb, t: &ModelTangent) -> f64 {
+    pub(crate) fn tangent(&self, db: &GeomDb, t: &ModelTangent) -> f64 {
         let at = |h: &LineHit| {
             let dr = t.surface_at(db, h.surface, h.uv[0], h.uv[1]).point;
             self.dt(db, h, &dr).unwrap_or(0.0)
@@ -78,7 +77,7 @@ impl Thickness {
 
     /// The transpose of [`tangent`](Self::tangent): adds `bar` · d(thickness)/d(model) to
     /// the cotangent `w`.
-    pub(super) fn add_cotangent(&self, db: &GeomDb, bar: f64, w: &mut ModelTangent) {
+    pub(crate) fn add_cotangent(&self, db: &GeomDb, bar: f64, w: &mut ModelTangent) {
         for (h, sign) in [(&self.upper, 1.0), (&self.lower, -1.0)] {
             let e = db.surface(h.surface).derivs(h.uv[0], h.uv[1]);
             let n = e.du.cross(&e.dv);
@@ -94,64 +93,13 @@ impl Thickness {
     }
 }
 
-fn surface_label(db: &GeomDb, s: SurfaceId) -> String {
-    let name = &db.surface(s).name;
-    if name.is_empty() {
-        format!("{}", s.0)
-    } else {
-        format!("{} ({name})", s.0)
-    }
-}
-
-/// Why a thickness could not be measured: the intersections found and the Newton solves that
-/// did not converge.
+/// Why a thickness could not be measured: fewer than two intersections.
 #[derive(Debug, Clone)]
 pub struct LineFailure {
-    hits: usize,
-    failed: Vec<(SurfaceId, f64)>,
-}
-
-impl LineFailure {
-    pub(super) fn into_error(
-        self,
-        name: &str,
-        station: usize,
-        p: &[f64; 3],
-        d: &[f64; 3],
-        db: &GeomDb,
-        surfaces: &[SurfaceId],
-    ) -> ConstraintError {
-        let failed = if self.failed.is_empty() {
-            String::new()
-        } else {
-            let list: Vec<String> = self
-                .failed
-                .iter()
-                .take(3)
-                .map(|(s, r)| format!("surface {} residual {r:.3e}", surface_label(db, *s)))
-                .collect();
-            format!(
-                " ({} Newton solve(s) did not converge: {})",
-                self.failed.len(),
-                list.join(", ")
-            )
-        };
-        ConstraintError::Line {
-            name: name.to_string(),
-            station,
-            line: format!(
-                "at ({:.6}, {:.6}, {:.6}), the line along ({:.3}, {:.3}, {:.3})",
-                p[0], p[1], p[2], d[0], d[1], d[2]
-            ),
-            surfaces: surfaces
-                .iter()
-                .map(|s| surface_label(db, *s))
-                .collect::<Vec<_>>()
-                .join(", "),
-            hits: self.hits,
-            failed,
-        }
-    }
+    /// Intersections found.
+    pub hits: usize,
+    /// The Newton solves that did not converge: surface and final residual.
+    pub failed: Vec<(SurfaceId, f64)>,
 }
 
 /// The line through `p` along the unit `d` against triangle (a, b, c): (s, w, t) with
@@ -247,7 +195,7 @@ pub fn line_hits(
 }
 
 /// The thickness of the part made of `surfaces` at `p` along the unit direction `d`
-/// (module doc).
+/// (module doc of [`super`]).
 pub fn thickness(
     db: &GeomDb,
     surfaces: &[SurfaceId],
