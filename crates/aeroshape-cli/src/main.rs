@@ -23,6 +23,7 @@ macro_rules! outln {
 
 mod case;
 mod case_check;
+mod constraints;
 mod deform;
 #[cfg(feature = "mpi")]
 mod deform_mpi;
@@ -52,6 +53,9 @@ enum Command {
     /// Make a ready case from your own CAD and grid (`case init`).
     #[command(subcommand)]
     Case(case::CaseCmd),
+    /// Geometric constraints (thickness, volume, area) of a case on the updated model, and
+    /// their exact Jacobian with respect to the design variables.
+    Constraints(constraints::ConstraintsArgs),
     /// Deform a volume mesh from prescribed boundary motion (spring analogy, paper §4).
     Deform(deform::DeformArgs),
     /// Inspect and check geometric databases (RON).
@@ -161,6 +165,7 @@ where
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Case(cmd) => case::run(cmd),
+        Command::Constraints(args) => constraints::run(args),
         Command::Deform(args) => deform::run(args),
         Command::Geom(cmd) => geom::run(cmd),
         Command::Gradient(args) => gradient::run(args),

@@ -93,6 +93,10 @@ pub struct Case {
     /// source is `External("name")` is driven by the wing master of that name.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub wing_masters: std::collections::BTreeMap<String, wingmaster::WingMasterSpec>,
+    /// Geometric constraints measured on the updated model ([`crate::constraints`]);
+    /// optional, empty by default.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub constraints: Vec<crate::constraints::ConstraintSpec>,
 }
 
 /// Spring stiffness choice of the case file (see `deform::Stiffness`).

@@ -18,7 +18,8 @@
 //! * B-spline bases ([`bspline`]), shared by the parametrisation crates.
 //! * The numerics every crate shares: the safeguarded box-constrained Newton ([`newton`]),
 //!   point inversion — the foot of the normal, Eq. (11) — on curves and surfaces
-//!   ([`invert`]), and point merging within a tolerance ([`merge`]).
+//!   ([`invert`]), point merging within a tolerance ([`merge`]) and Gauss–Legendre rules
+//!   ([`quadrature`]).
 
 pub mod bspline;
 pub mod check;
@@ -36,6 +37,7 @@ pub mod merge;
 pub mod newton;
 pub mod poly;
 pub mod prelude;
+pub mod quadrature;
 pub mod surface;
 pub mod topology;
 

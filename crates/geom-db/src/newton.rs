@@ -19,10 +19,12 @@
 //! and reported as it is ([`NewtonReport`]).
 //!
 //! [`pair`] holds the one problem that two crates solve with it: the intersection point of
-//! two surfaces with one parameter frozen (Eq. 12).
+//! two surfaces with one parameter frozen (Eq. 12);
+//! [`line`] holds the intersection of a straight line and a surface (thickness constraints).
 
 use nalgebra::{SMatrix, SVector};
 
+pub mod line;
 pub mod pair;
 
 /// Objective value, gradient and (approximate) Hessian at a point.

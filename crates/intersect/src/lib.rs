@@ -17,6 +17,8 @@
 //!   with a frozen parameter chosen per point and a normal-plane fallback.
 //! * [`corner`]: corners as the minimal-distance points of two curves (Eq. 13).
 //! * [`check`]: deviation of a curve from its defining surfaces between control points.
+//! * [`measure`]: thickness, volume and area of a model, with their derivatives for a
+//!   model perturbation (the constraints of `aeroshape`, issue 46).
 //! * [`update`]: the model update — surfaces re-solved, curves re-intersected, corners,
 //!   curve-component ranges — in dependency order, with a report.
 //!
@@ -27,6 +29,7 @@ pub mod bvh;
 pub mod check;
 pub mod corner;
 pub mod error;
+pub mod measure;
 pub mod project;
 pub mod ssi;
 pub mod update;

@@ -105,11 +105,13 @@ pub const GEOMETRY_AND_GRID: &[Knows] = &[
             "CurveCompId",
             "eval",
             "import",
+            "linearise",
         ],
-        intersect: &["Error", "update"],
+        intersect: &["Error", "update", "measure"],
         why: "drives the chain; ties the wall to the geometry through surfgrid; `case init` \
               imports the CAD and samples its surfaces and curves (never grid nodes) for the \
-              default design space",
+              default design space; the constraints measure the model (intersect's measures) \
+              and differentiate them along model tangents",
     },
     Knows {
         krate: "aeroshape-py",

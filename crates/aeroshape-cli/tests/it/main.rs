@@ -3,6 +3,7 @@
 
 mod cad_param;
 mod case;
+mod constraints;
 mod deform;
 mod fuselage;
 mod geom;

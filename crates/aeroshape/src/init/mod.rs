@@ -298,6 +298,7 @@ pub fn init_case(
             ..Default::default()
         },
         wing_masters: space.wing_masters,
+        constraints: Vec::new(),
     };
     let study = Study::new(case.clone(), &case_path)?;
     let checked = bounds::check_bounds(&study, opts.max_halvings)?;

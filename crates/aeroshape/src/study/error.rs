@@ -22,6 +22,9 @@ pub enum StudyError {
     /// The case file is bad.
     #[error(transparent)]
     Case(#[from] CaseError),
+    /// A geometric constraint cannot be measured (its error names it).
+    #[error(transparent)]
+    Constraint(#[from] crate::constraints::ConstraintError),
     /// A file of the case cannot be read.
     #[error("{}: {source}", path.display())]
     Read {

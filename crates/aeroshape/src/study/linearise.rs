@@ -67,7 +67,7 @@ pub struct FdCheck {
     pub rel_error: f64,
 }
 
-fn length(what: &'static str, expected: usize, found: usize) -> Result<()> {
+pub(super) fn check_len(what: &'static str, expected: usize, found: usize) -> Result<()> {
     if expected == found {
         Ok(())
     } else {
@@ -89,7 +89,7 @@ fn jac_times(j: &param::Jacobian, v: &[f64]) -> Vec<Vector3> {
 }
 
 /// Jᵀ w for the param Jacobian.
-fn jac_t_times(j: &param::Jacobian, w: &[Vector3]) -> Vec<f64> {
+pub(super) fn jac_t_times(j: &param::Jacobian, w: &[Vector3]) -> Vec<f64> {
     let mut out = vec![0.0; j.cols()];
     for (r, row) in j.outer_iterator().enumerate() {
         let wr = w[r / 3][r % 3];
@@ -272,7 +272,7 @@ impl ChainLinearisation<'_> {
 
     /// The wall nodes' perturbation, one per grid node (zero off the wall).
     fn wall_tangent(&self, dx: &[f64]) -> Result<Vec<Vector3>> {
-        length("design direction", self.x.len(), dx.len())?;
+        check_len("design direction", self.x.len(), dx.len())?;
         let dp = jac_times(&self.jac, dx);
         let t = self.model.jvp(&dp)?;
         Ok(self.surface.jvp(&t)?)
@@ -305,7 +305,7 @@ impl ChainLinearisation<'_> {
     /// wall are ignored).
     pub fn vjp_wall(&self, x_bar: &[[f64; 3]]) -> Result<Vec<f64>> {
         let s = &self.study;
-        length("wall sensitivities", s.grid.n_nodes(), x_bar.len())?;
+        check_len("wall sensitivities", s.grid.n_nodes(), x_bar.len())?;
         let xb: Vec<Vector3> = x_bar
             .iter()
             .zip(&s.wall)
@@ -327,7 +327,7 @@ impl ChainLinearisation<'_> {
     /// deformation, then the wall's transposes.
     pub fn vjp(&self, x_bar: &[[f64; 3]]) -> Result<Vec<f64>> {
         let s = &self.study;
-        length("volume sensitivities", s.grid.n_nodes(), x_bar.len())?;
+        check_len("volume sensitivities", s.grid.n_nodes(), x_bar.len())?;
         let wb = if s.case.deform.warm_start {
             // The adjoint solves start from the previous reverse product's solutions.
             let mut start = s
@@ -366,7 +366,7 @@ pub fn model_jacobian(
 ) -> Result<param::Jacobian> {
     // the rows are the updated model's nodes: a junction the update re-fitted has more
     let n = lin.model().control_nodes.len();
-    length("modifier Jacobian rows", 3 * lin.n_inputs(), jp.rows())?;
+    check_len("modifier Jacobian rows", 3 * lin.n_inputs(), jp.rows())?;
     let cols: Vec<Vec<Vector3>> = (0..jp.cols())
         .map(|l| {
             let c = param::jacobian::column(jp, l);

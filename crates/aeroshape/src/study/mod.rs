@@ -60,6 +60,7 @@ use surfgrid::SurfaceGrid;
 
 use crate::case::Case;
 
+pub mod constraints;
 #[cfg(feature = "mpi")]
 pub mod distributed;
 pub mod error;
@@ -69,6 +70,7 @@ pub mod linearise;
 pub mod report;
 mod setup;
 
+pub use constraints::{ConstraintJacobian, ConstraintRow};
 pub use error::{Result, StudyError};
 pub use linearise::{ChainLinearisation, FdCheck, model_jacobian};
 pub use report::{DeformPhase, ModelPhase, ParamPhase, Quality, Report, SetupReport, SurfacePhase};

@@ -4,6 +4,7 @@ mod accuracy;
 mod corner;
 mod fixture;
 mod linearise;
+mod measure;
 mod model;
 mod project;
 mod props;
