@@ -20,7 +20,7 @@
 //!
 //! [`pair`] holds the one problem that two crates solve with it: the intersection point of
 //! two surfaces with one parameter frozen (Eq. 12);
-//! [`line`] holds the intersection of a straight line and a surface (thickness constraints).
+//! [`line`](mod@line) holds the intersection of a straight line and a surface (thickness constraints).
 
 use nalgebra::{SMatrix, SVector};
 
