@@ -58,14 +58,13 @@ pub struct DeformArgs {
     /// `aeroshape mesh`: entity tag = component id + 1), corners frozen.
     #[arg(long, value_name = "GEOM.ron")]
     pub geometry: Option<PathBuf>,
-    /// Marker held fixed (the default for markers not named, except symmetry planes found
-    /// by shape; repeatable).
+    /// Marker held fixed (the default for markers not named; repeatable).
     #[arg(long, value_name = "MARKER")]
     pub fixed: Vec<String>,
-    /// Hold every marker not named fixed, symmetry planes included (by default a marker
-    /// not named that is a plane touching the moving markers slides on it).
+    /// Find the symmetry planes by shape: a marker not named that is a plane touching the
+    /// moving markers slides on it instead of being held fixed.
     #[arg(long)]
-    pub fix_planes: bool,
+    pub find_planes: bool,
     /// Linear solver: `pcg` (conjugate gradients with multigrid), `jacobi` (the paper's
     /// point iteration, Eq. 22), `pcg-jacobi` (conjugate gradients, Jacobi preconditioner).
     #[arg(long, default_value_t = SolverKind::PcgMultigrid,
@@ -436,7 +435,7 @@ pub(crate) fn add_displacements(
     Ok(())
 }
 
-/// Unless `--fix-planes`: the markers not named that are symmetry planes by their shape
+/// With `--find-planes`: the markers not named that are symmetry planes by their shape
 /// (`deform::Request::symmetry_planes`) slide on their planes, each said in a note; then the
 /// fixed markers' nodes where they meet them are held again (`add_displacements`).
 pub(crate) fn slide_symmetry_planes(
@@ -444,7 +443,7 @@ pub(crate) fn slide_symmetry_planes(
     m: &mesh::Mesh,
     request: &mut deform::Request,
 ) -> anyhow::Result<()> {
-    if args.fix_planes {
+    if !args.find_planes {
         return Ok(());
     }
     let planes = request.symmetry_planes(m);
@@ -454,7 +453,7 @@ pub(crate) fn slide_symmetry_planes(
     for (name, dev) in &planes {
         eprintln!(
             "note: marker {name} slides on its plane (not named; a plane touching the moving \
-             markers, nodes within {dev:.1e} of it); --fixed {name} or --fix-planes holds it"
+             markers, nodes within {dev:.1e} of it, --find-planes); --fixed {name} holds it"
         );
         request.slide.push(name.clone());
     }

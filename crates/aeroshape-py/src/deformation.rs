@@ -157,11 +157,12 @@ fn vec3(v: [f64; 3], what: &str) -> PyResult<[f64; 3]> {
     axis_dir=[0.0, 0.0, 1.0], translate=[0.0, 0.0, 0.0], displacements=None,
     slide=Vec::new(), geometry=None, fixed=Vec::new(), solver="pcg",
     stiffness="inverse-length2", no_rotation=false, rotation_reach=None, tolerance=1e-8,
-    allow_inverted=false, progress=None
+    allow_inverted=false, find_planes=false, progress=None
 ), text_signature = "(mesh, *, rigid=(), rotate_deg=0.0, axis_point=(0.0, 0.0, 0.0), \
     axis_dir=(0.0, 0.0, 1.0), translate=(0.0, 0.0, 0.0), displacements=None, slide=(), \
     geometry=None, fixed=(), solver='pcg', stiffness='inverse-length2', no_rotation=False, \
-    rotation_reach=None, tolerance=1e-08, allow_inverted=False, progress=None)")]
+    rotation_reach=None, tolerance=1e-08, allow_inverted=False, find_planes=False, \
+    progress=None)")]
 pub fn deform_mesh(
     py: Python<'_>,
     mesh: PyRef<'_, PyMesh>,
@@ -180,6 +181,7 @@ pub fn deform_mesh(
     rotation_reach: Option<f64>,
     tolerance: f64,
     allow_inverted: bool,
+    find_planes: bool,
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<PyDeformation> {
     let m = &mesh.inner;
@@ -206,6 +208,28 @@ pub fn deform_mesh(
     )?;
     // as `aeroshape deform`: a node of a fixed marker never moves where it meets a sliding one
     aeroshape::precedence::hold_fixed_nodes(m, &mut request);
+    // as `aeroshape deform --find-planes`: a marker not named that is a symmetry plane by its
+    // shape slides
+    if find_planes {
+        let planes = request.symmetry_planes(m);
+        if !planes.is_empty() {
+            let log = py
+                .import("logging")?
+                .call_method1("getLogger", ("aeroshape",))?;
+            for (name, dev) in planes {
+                log.call_method1(
+                    "info",
+                    (format!(
+                        "marker {name} slides on its plane (not named; a plane touching the \
+                         moving markers, nodes within {dev:.1e} of it, find_planes=True); \
+                         fixed=[\"{name}\"] holds it"
+                    ),),
+                )?;
+                request.slide.push(name);
+            }
+            aeroshape::precedence::hold_fixed_nodes(m, &mut request);
+        }
+    }
     let mut prog = Progress::new(py, "deform", progress)?;
     let result = py.detach(|| -> Result<_, (Kind, String)> {
         let geometry = match &geometry {

@@ -495,12 +495,12 @@ fn openfoam_case_in_openfoam_case_out_with_points_only_changed() {
     assert!(!o.status.success());
 }
 
-/// A symmetry plane not named is found by its shape and slides (issue 43): a 2° pitch of
-/// the default case's wing and fuselage keeps every cell valid, with a note naming the
-/// marker, and the symmetry nodes stay in their plane (y = 0) while some of them move; with
-/// `--fix-planes` the same motion inverts cells at the root and is refused, exit 1.
+/// With `--find-planes` a symmetry plane not named is found by its shape and slides (issue
+/// 43): a 2° pitch of the default case's wing and fuselage keeps every cell valid, with a
+/// note naming the marker, and the symmetry nodes stay in their plane while some of them
+/// move; without it the same motion inverts cells at the root and is refused, exit 1.
 #[test]
-fn a_symmetry_plane_found_by_shape_slides_unless_fixed() {
+fn a_symmetry_plane_found_by_shape_slides() {
     let dir = tempfile::tempdir().unwrap();
     let grid = crate::case::root().join("fixtures/cases/default/grid.msh");
     let out = dir.path().join("pitched.su2");
@@ -522,6 +522,7 @@ fn a_symmetry_plane_found_by_shape_slides_unless_fixed() {
         .arg("-o")
         .arg(&out)
         .args(args)
+        .arg("--find-planes")
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
@@ -555,7 +556,6 @@ fn a_symmetry_plane_found_by_shape_slides_unless_fixed() {
         .arg("-o")
         .arg(dir.path().join("fixed.su2"))
         .args(args)
-        .arg("--fix-planes")
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(1));

@@ -359,6 +359,7 @@ def deform(
     rotation_reach: float | None = None,
     tolerance: float = 1e-8,
     allow_inverted: bool = False,
+    find_planes: bool = False,
     progress: _Progress | None = None,
 ) -> Deformation:
     """Deforms a volume grid from prescribed boundary motion, as ``aeroshape deform``: each
@@ -366,7 +367,9 @@ def deform(
     move by the rotation (degrees about ``axis_dir`` through ``axis_point``) then the
     translation; ``displacements`` prescribes nodes (``(nodes, d)`` or ``{node: d}``);
     ``slide`` markers slide on the supports of ``geometry`` when all their nodes are
-    classified, else on their plane; ``fixed`` and unnamed markers stay. The GIL is released
+    classified, else on their plane; ``fixed`` and unnamed markers stay, except, with
+    ``find_planes``, an unnamed marker that is a plane touching the moving markers, which
+    slides on it (an INFO record of the logger ``"aeroshape"`` says so). The GIL is released
     while it runs. Raises :class:`DeformError` when the deformation fails."""
 
 # Present only when the package is built with its cargo feature ``mpi``
