@@ -209,20 +209,7 @@ fn fraction(f: f64) -> String {
 /// are made absolute when `out` is in another folder.
 fn write_case(study: &Study, r: &BoxCheck, input: &Path, out: &Path) -> anyhow::Result<()> {
     let mut case = study.case().clone();
-    let bounds = r.bounds(study);
-    let names: Vec<&str> = study
-        .registry()
-        .variables()
-        .iter()
-        .map(|v| v.name.as_str())
-        .collect();
-    for m in &mut case.parametrisation.modifiers {
-        for v in aeroshape::init::space::variables_mut(m) {
-            if let Some(k) = names.iter().position(|n| *n == v.name) {
-                (v.lower, v.upper) = bounds[k];
-            }
-        }
-    }
+    r.apply_bounds(study, &mut case);
     let dir = |p: &Path| {
         p.parent()
             .map(Path::to_path_buf)

@@ -164,6 +164,20 @@ impl BoxCheck {
             .collect()
     }
 
+    /// Sets the bounds of `case` (the case `study` was built from) to
+    /// [`BoxCheck::bounds`], variable by variable.
+    pub fn apply_bounds(&self, study: &Study, case: &mut crate::case::Case) {
+        let bounds = self.bounds(study);
+        let vars = study.registry().variables();
+        for m in &mut case.parametrisation.modifiers {
+            for v in crate::init::space::variables_mut(m) {
+                if let Some(k) = vars.iter().position(|w| w.name == v.name) {
+                    (v.lower, v.upper) = bounds[k];
+                }
+            }
+        }
+    }
+
     /// Whether every bound is kept (the whole box passed).
     pub fn whole_box(&self) -> bool {
         self.scales.iter().all(|&s| s == 1.0)

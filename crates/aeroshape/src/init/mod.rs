@@ -408,8 +408,8 @@ pub fn init_case(
     })
 }
 
-/// Checks the box of `case` (bounds already set variable by variable) as a whole and
-/// multiplies every bound by the scale at which all samples pass.
+/// Checks the box of `case` (bounds already set variable by variable) as a whole and sets
+/// each variable's bounds to those at which all samples pass ([`crate::boxcheck::BoxCheck::apply_bounds`]).
 fn check_box_together(
     case: &mut Case,
     case_path: &Path,
@@ -436,14 +436,7 @@ fn check_box_together(
             .collect(),
     };
     if check.scale > 0.0 && !check.whole_box() {
-        let bounds = check.bounds(&study);
-        for m in &mut case.parametrisation.modifiers {
-            for v in space::variables_mut(m) {
-                if let Some(k) = names.iter().position(|n| *n == v.name) {
-                    (v.lower, v.upper) = bounds[k];
-                }
-            }
-        }
+        check.apply_bounds(&study, case);
     }
     Ok(summary)
 }

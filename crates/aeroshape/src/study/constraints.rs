@@ -54,10 +54,43 @@ pub struct ConstraintJacobian {
     pub jacobian: Vec<Vec<f64>>,
 }
 
+/// [`Study::constraints_linearised`]'s result.
+struct Linearised {
+    jp: param::Jacobian,
+    db: GeomDb,
+    lin: intersect::update::ModelLinearisation,
+    at: Vec<Measured>,
+    rows: Vec<ConstraintRow>,
+}
+
 impl Study {
-    /// The case's constraints measured on the initial model.
-    pub fn initial_constraints(&self) -> Result<Vec<Measured>> {
-        Ok(measure_all(&self.db, &self.case.constraints)?)
+    /// The case's constraints measured on the initial model (measured the first time it is
+    /// asked for, then kept).
+    pub fn initial_constraints(&self) -> Result<&[Measured]> {
+        if let Some(m) = self.initial_constraints.get() {
+            return Ok(m);
+        }
+        let m = measure_all(&self.db, &self.case.constraints)?;
+        Ok(self.initial_constraints.get_or_init(|| m))
+    }
+
+    /// What both derivative products need at `x`: the param Jacobian, the updated model and
+    /// its linearisation, the constraints measured on it and their rows.
+    fn constraints_linearised(&self, x: &[f64]) -> Result<Linearised> {
+        super::evaluate::check_length(&self.prepared, x)?;
+        let initial = self.initial_constraints()?;
+        let (points, jp) = self.prepared.apply_with_jacobian(x)?;
+        let (db, _) = self.model.update(&points)?;
+        let lin = self.model.linearise(&points, &db)?;
+        let at = measure_all(&db, &self.case.constraints)?;
+        let rows = self.rows(&at, initial);
+        Ok(Linearised {
+            jp,
+            db,
+            lin,
+            at,
+            rows,
+        })
     }
 
     /// The model updated to `x` (param, then the model update; no grid), the model the
@@ -101,7 +134,7 @@ impl Study {
         let initial = self.initial_constraints()?;
         let db = self.updated_model(x)?;
         let at = measure_all(&db, &self.case.constraints)?;
-        Ok(self.rows(&at, &initial))
+        Ok(self.rows(&at, initial))
     }
 
     /// The constraints' values at `x`, in the case's order (a thickness gives one value per
@@ -117,13 +150,13 @@ impl Study {
 
     /// The constraints at `x` with their exact Jacobian d(reported)/dx (module doc).
     pub fn constraints_jacobian(&self, x: &[f64]) -> Result<ConstraintJacobian> {
-        super::evaluate::check_length(&self.prepared, x)?;
-        let initial = self.initial_constraints()?;
-        let (points, jp) = self.prepared.apply_with_jacobian(x)?;
-        let (db, _) = self.model.update(&points)?;
-        let lin = self.model.linearise(&points, &db)?;
-        let at = measure_all(&db, &self.case.constraints)?;
-        let rows = self.rows(&at, &initial);
+        let Linearised {
+            jp,
+            db,
+            lin,
+            at,
+            rows,
+        } = self.constraints_linearised(x)?;
         let n = jp.cols();
         let mut jacobian = vec![vec![0.0; n]; at.len()];
         for l in 0..n {
@@ -154,13 +187,13 @@ impl Study {
     /// x̄ = Σ_k w_k d(reported_k)/dx at `x`: the reverse product of the constraints (one
     /// reverse product of the model update for any number of constraints).
     pub fn constraints_vjp(&self, x: &[f64], w: &[f64]) -> Result<Vec<f64>> {
-        super::evaluate::check_length(&self.prepared, x)?;
-        let initial = self.initial_constraints()?;
-        let (points, jp) = self.prepared.apply_with_jacobian(x)?;
-        let (db, _) = self.model.update(&points)?;
-        let lin = self.model.linearise(&points, &db)?;
-        let at = measure_all(&db, &self.case.constraints)?;
-        let rows = self.rows(&at, &initial);
+        let Linearised {
+            jp,
+            db,
+            lin,
+            at,
+            rows,
+        } = self.constraints_linearised(x)?;
         super::linearise::check_len("constraint weights", at.len(), w.len())?;
         let mut bar = lin.zero_tangent();
         for ((m, r), wk) in at.iter().zip(&rows).zip(w) {

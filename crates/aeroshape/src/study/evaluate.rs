@@ -135,6 +135,24 @@ impl Study {
         ))
     }
 
+    /// Stages 2 and 3 without their reports, for the control nodes `points`: the updated
+    /// geometry, the wall grid on it with its update record, and the prescribed positions of
+    /// stage 4 ([`Study::prescribed`]).
+    pub(super) fn wall_positions(
+        &self,
+        points: &[Point3],
+    ) -> Result<(GeomDb, SurfaceGrid, surfgrid::UpdateRecord, Vec<[f64; 3]>)> {
+        let (geometry, _) = self.model.update(points)?;
+        let (surface, _, record) = self.surface_updater.update_recorded(
+            &self.surface,
+            &self.db,
+            &geometry,
+            &self.case.surface_grid.update_options(),
+        )?;
+        let (positions, _) = self.prescribed(&surface);
+        Ok((geometry, surface, record, positions))
+    }
+
     /// The prescribed positions of the volume deformation for the wall grid `surface`, in
     /// the order of the set-up's boundary conditions (`setup::deform_bc`): the wall nodes at
     /// their new place on the geometry, then the nodes of `fixed` markers where they are;

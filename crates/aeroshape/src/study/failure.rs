@@ -53,14 +53,7 @@ impl Study {
     pub fn failed_grid(&self, x: &[f64], max_cells: usize) -> Result<FailedGrid> {
         super::evaluate::check_length(&self.prepared, x)?;
         let (points, _) = super::evaluate::param_phase(&self.prepared, &self.db, x)?;
-        let (geometry, _) = self.model.update(&points)?;
-        let (surface, _, _) = self.surface_updater.update_recorded(
-            &self.surface,
-            &self.db,
-            &geometry,
-            &self.case.surface_grid.update_options(),
-        )?;
-        let (positions, _) = self.prescribed(&surface);
+        let (_, _, _, positions) = self.wall_positions(&points)?;
         let d = self.deformer.deform_to_keeping_inverted(&positions, None)?;
         let mut grid = self.grid.clone();
         grid.coords = d.coords;
@@ -71,11 +64,9 @@ impl Study {
         let count = bad.len();
         bad.sort_by(|&a, &b| q[a].total_cmp(&q[b]).then(a.cmp(&b)));
         bad.truncate(max_cells);
-        let cell_nodes: Vec<(mesh::ElementKind, Vec<u32>)> = {
-            let mut all: Vec<(mesh::ElementKind, &[u32])> = Vec::new();
-            all.extend(grid.cells.iter());
-            bad.iter().map(|&c| (all[c].0, all[c].1.to_vec())).collect()
-        };
+        let all: Vec<(mesh::ElementKind, &[u32])> = grid.cells.iter().collect();
+        let cell_nodes: Vec<(mesh::ElementKind, Vec<u32>)> =
+            bad.iter().map(|&c| (all[c].0, all[c].1.to_vec())).collect();
         let shares = self.shares(x, &cell_nodes)?;
         let names = self.registry().names();
         let cells = bad

@@ -155,14 +155,7 @@ impl Study {
     /// The chain at `x` for its linearisation (control nodes `points`), the deformation
     /// started cold.
     fn evaluate_cold(&self, x: &[f64], points: &[geom_db::prelude::Point3]) -> Result<EvaluatedAt> {
-        let (geometry, _) = self.model.update(points)?;
-        let (surface, _, record) = self.surface_updater.update_recorded(
-            &self.surface,
-            &self.db,
-            &geometry,
-            &self.case.surface_grid.update_options(),
-        )?;
-        let (positions, _) = self.prescribed(&surface);
+        let (geometry, surface, record, positions) = self.wall_positions(points)?;
         let mut d = self.deformer.deform_to(&positions, None)?;
         let coords = std::mem::take(&mut d.coords);
         d.cell_quality = Vec::new();

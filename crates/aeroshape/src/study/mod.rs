@@ -132,6 +132,8 @@ pub struct Study {
     adjoint: Mutex<Option<deform::AdjointStart>>,
     /// The last evaluation's results, reused by [`Study::linearise`] at the same x.
     recent: Mutex<Option<Arc<EvaluatedAt>>>,
+    /// The case's constraints measured on the baseline model, once (`Study::constraints`).
+    initial_constraints: std::sync::OnceLock<Vec<crate::constraints::Measured>>,
     quality: Vec<f64>,
     quality_before: Quality,
     setup: SetupReport,

@@ -244,6 +244,7 @@ impl Study {
             last: Mutex::new(None),
             adjoint: Mutex::new(None),
             recent: Mutex::new(None),
+            initial_constraints: std::sync::OnceLock::new(),
             quality_before: Quality::of(&quality),
             quality,
             setup,
